@@ -1,0 +1,1 @@
+"""Ground-control station for a rigid team of rotorcraft carrying one payload."""

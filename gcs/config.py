@@ -1,0 +1,197 @@
+"""Team configuration: the shape, gains, limits, payload and airframe of one team.
+
+A team file (``configs/*.yaml``) is loaded into a frozen :class:`TeamConfig`
+and its shape into a :class:`~gcs.formation.Formation`; every mistake is refused
+with one line naming the file, the field and what is wrong.
+
+Vehicle positions are in the team's body frame: x forward, y right (NED-like),
+metres. Edges are ``[tail, head]`` or ``[tail, head, distance]`` by vehicle id,
+or mappings ``{tail: 1, head: 2, distance: 1.0}``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from gcs.formation import Formation, FormationError, build_formation
+from gcs.typed_config import ConfigError, field, from_mapping, load_yaml
+from vehicles.airframe import Airframe, load_airframe
+
+__all__ = [
+    "AnalysisConfig",
+    "ConfigError",
+    "EdgeSpec",
+    "GuidanceConfig",
+    "LimitsConfig",
+    "PayloadConfig",
+    "Team",
+    "TeamConfig",
+    "VehicleSpec",
+    "load_team",
+]
+
+STANDARD_GRAVITY = 9.80665  # m/s^2
+
+
+@dataclass(frozen=True)
+class VehicleSpec:
+    """One member of the team."""
+
+    id: int = field(doc="MAVLink system id of the vehicle", ge=1, le=254)
+    position: tuple[float, float] | None = field(
+        doc="desired position in the team body frame (x forward, y right), m", default=None)
+
+
+@dataclass(frozen=True)
+class EdgeSpec:
+    """One controlled distance between two vehicles (by id)."""
+
+    tail: int = field(doc="vehicle id at the tail (z_k = p_tail - p_head)")
+    head: int = field(doc="vehicle id at the head")
+    distance: float | None = field(doc="desired distance, m (derived from positions if absent)",
+                                   default=None, gt=0.0)
+
+
+@dataclass(frozen=True)
+class GuidanceConfig:
+    """Gains and operator ranges of the formation-motion guidance (eq. udi)."""
+
+    c1: float = field(doc="velocity gain c1, 1/s", gt=0.0)
+    c2: float = field(doc="distance gain c2, 1/s^2", gt=0.0)
+    rate_hz: float = field(doc="guidance rate, Hz", default=4.0, gt=0.0, le=100.0)
+    max_speed: float = field(doc="translation speed at full stick, m/s", default=1.0, gt=0.0)
+    max_rotation_disagreement: float = field(
+        doc="largest rotation disagreement mu_r at full stick, m/s", default=0.2, ge=0.0)
+    scale_min: float = field(doc="smallest shape scale", default=0.3, gt=0.0)
+    scale_max: float = field(doc="largest shape scale", default=2.0, gt=0.0)
+    scale_step: float = field(doc="scale change per operator step", default=0.05, gt=0.0)
+    hold_compensation: bool = field(
+        doc="predict relative positions half a period ahead (see gcs.guidance)", default=True)
+
+    def __post_init__(self) -> None:
+        if self.scale_min > 1.0 or self.scale_max < 1.0:
+            raise ValueError(f"guidance.scale_min/scale_max must bracket 1, got "
+                             f"[{self.scale_min:g}, {self.scale_max:g}]")
+
+
+@dataclass(frozen=True)
+class LimitsConfig:
+    """Physical and safety limits enforced on the vehicles and the guidance."""
+
+    bank_deg: float = field(doc="largest roll/pitch angle, degrees", gt=0.0, lt=90.0)
+    accel_norm: float = field(doc="saturation of the horizontal acceleration norm, m/s^2",
+                              gt=0.0)
+    accel_axis: float = field(doc="saturation of each horizontal acceleration axis, m/s^2",
+                              gt=0.0)
+
+    @property
+    def bank(self) -> float:
+        """Bank limit, rad."""
+        return math.radians(self.bank_deg)
+
+
+@dataclass(frozen=True)
+class PayloadConfig:
+    """The suspended payload and its ropes."""
+
+    mass: float = field(doc="payload mass M, kg", gt=0.0)
+    rope_length: float = field(doc="rope length l (same for every vehicle), m", gt=0.0)
+
+
+@dataclass(frozen=True)
+class AnalysisConfig:
+    """Assumptions of the worst-case analysis (paper, section 'Force and worst case')."""
+
+    max_distance_error: float = field(doc="worst distance error assumed in eq. max, m",
+                                      default=1.0, gt=0.0)
+    max_speed_error: float | None = field(
+        doc="worst speed error ||e_v|| in eq. max, m/s (default: guidance.max_speed)",
+        default=None, gt=0.0)
+    design_rope_angle_deg: float = field(
+        doc="largest rope angle from the vertical the design must withstand, degrees",
+        default=45.0, gt=0.0, lt=90.0)
+    payload_share: int | None = field(
+        doc="a vehicle may carry 1/share of the payload weight (default: vehicles - 1)",
+        default=None, ge=1)
+    gravity: float = field(doc="gravitational acceleration, m/s^2", default=STANDARD_GRAVITY,
+                           gt=0.0)
+
+
+@dataclass(frozen=True)
+class TeamConfig:
+    """Everything that defines one team; see configs/bebop_square.yaml."""
+
+    name: str = field(doc="team name (also the zenoh fleet name)")
+    airframe: Airframe = field(doc="airframe of every vehicle: a file path or a mapping")
+    vehicles: tuple[VehicleSpec, ...] = field(doc="team members", min_len=2)
+    edges: tuple[EdgeSpec, ...] = field(doc="controlled distances", min_len=1)
+    guidance: GuidanceConfig = field(doc="guidance gains and ranges")
+    limits: LimitsConfig = field(doc="limits")
+    payload: PayloadConfig = field(doc="payload and ropes")
+    analysis: AnalysisConfig = field(doc="worst-case analysis assumptions",
+                                     default_factory=AnalysisConfig)
+
+
+@dataclass(frozen=True, eq=False)
+class Team:
+    """A loaded team: its validated config, its formation and where it came from."""
+
+    config: TeamConfig
+    formation: Formation
+    source: str
+
+
+def _normalise(raw: Any, path: Path) -> Any:
+    """Accept the short forms of the file (edge lists, airframe by path)."""
+    if not isinstance(raw, dict):
+        return raw
+    raw = dict(raw)
+    edges = raw.get("edges")
+    if isinstance(edges, list):
+        out = []
+        for k, e in enumerate(edges):
+            if isinstance(e, list):
+                if len(e) not in (2, 3):
+                    raise ConfigError(str(path), f"edges[{k}]",
+                                      f"expected [tail, head] or [tail, head, distance], "
+                                      f"got {len(e)} values")
+                e = dict(zip(("tail", "head", "distance"), e, strict=False))
+            out.append(e)
+        raw["edges"] = out
+    frame = raw.get("airframe")
+    if isinstance(frame, str):
+        frame_path = (path.parent / frame).resolve()
+        if not frame_path.is_file():
+            raise ConfigError(str(path), "airframe", f"file not found: {frame}")
+        raw["airframe"] = load_airframe(frame_path)
+    return raw
+
+
+def load_team(path: str | Path) -> Team:
+    """Load and validate a team file; raises ConfigError (one line) on any mistake."""
+    path = Path(path)
+    cfg = from_mapping(TeamConfig, _normalise(load_yaml(path), path), str(path))
+    ids = [v.id for v in cfg.vehicles]
+    have_pos = [v.position is not None for v in cfg.vehicles]
+    if any(have_pos) and not all(have_pos):
+        k = have_pos.index(False)
+        raise ConfigError(str(path), f"vehicles[{k}].position",
+                          "missing: give every vehicle a position, or none")
+    positions = np.array([v.position for v in cfg.vehicles]) if all(have_pos) else None
+    try:
+        formation = build_formation(ids, [(e.tail, e.head) for e in cfg.edges],
+                                    positions=positions,
+                                    distances=[e.distance for e in cfg.edges])
+    except FormationError as exc:
+        raise ConfigError(str(path), exc.where, exc.what) from None
+    if cfg.limits.accel_axis > cfg.limits.accel_norm:
+        raise ConfigError(str(path), "limits.accel_axis",
+                          f"{cfg.limits.accel_axis:g} m/s^2 exceeds limits.accel_norm "
+                          f"{cfg.limits.accel_norm:g} m/s^2")
+    return Team(config=cfg, formation=formation, source=str(path))
+

@@ -1,0 +1,1 @@
+"""Physics of the team: quadrotors, ropes, payload, ground, sensors."""

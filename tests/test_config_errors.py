@@ -1,0 +1,130 @@
+"""A wrong team config is refused with one line naming the file, the field and the fault."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import yaml
+
+from gcs.config import ConfigError, load_team
+
+SQUARE = Path("configs/bebop_square.yaml")
+
+
+def write(tmp_path: Path, mutate) -> Path:  # type: ignore[no-untyped-def]
+    data = yaml.safe_load(SQUARE.read_text())
+    data["airframe"] = str(Path("configs/airframes/bebop2.yaml").resolve())
+    mutate(data)
+    path = tmp_path / "team.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+def refused(tmp_path: Path, mutate, field: str, words: str) -> str:  # type: ignore[no-untyped-def]
+    path = write(tmp_path, mutate)
+    with pytest.raises(ConfigError) as info:
+        load_team(path)
+    text = str(info.value)
+    assert "\n" not in text
+    assert text.startswith(f"{path}: {field}"), text
+    assert words in text, text
+    return text
+
+
+def test_the_shipped_configs_load() -> None:
+    for path in Path("configs").glob("*.yaml"):
+        load_team(path)
+
+
+def test_missing_field(tmp_path: Path) -> None:
+    refused(tmp_path, lambda d: d["guidance"].pop("c2"), "guidance.c2", "missing")
+
+
+def test_wrong_type(tmp_path: Path) -> None:
+    refused(tmp_path, lambda d: d["guidance"].update(c1="fast"), "guidance.c1",
+            "expected a number, got a string")
+
+
+def test_negative_mass(tmp_path: Path) -> None:
+    refused(tmp_path, lambda d: d["payload"].update(mass=-0.4), "payload.mass",
+            "must be greater than 0, got -0.4")
+
+
+def test_negative_airframe_mass_inline(tmp_path: Path) -> None:
+    def inline(d: dict) -> None:
+        d["airframe"] = {"mass": -1.0}
+    refused(tmp_path, inline, "airframe.mass", "greater than 0")
+
+
+def test_unknown_field(tmp_path: Path) -> None:
+    refused(tmp_path, lambda d: d["limits"].update(bank_degree=20), "limits.bank_degree",
+            "unknown field")
+
+
+def test_distance_does_not_fit_positions(tmp_path: Path) -> None:
+    def bad(d: dict) -> None:
+        d["edges"][1] = [2, 4, 1.2]
+    refused(tmp_path, bad, "edges[1].distance", "does not fit the positions")
+
+
+def test_edge_names_unknown_vehicle(tmp_path: Path) -> None:
+    def bad(d: dict) -> None:
+        d["edges"][3] = [1, 7]
+    refused(tmp_path, bad, "edges[3].head", "unknown vehicle id 7")
+
+
+def test_graph_not_rigid(tmp_path: Path) -> None:
+    def ring(d: dict) -> None:
+        d["edges"] = [[1, 2], [2, 3], [3, 4], [4, 1]]
+    refused(tmp_path, ring, "edges", "not rigid")
+
+
+def test_duplicate_vehicle_id(tmp_path: Path) -> None:
+    refused(tmp_path, lambda d: d["vehicles"][2].update(id=1), "vehicles", "appears twice")
+
+
+def test_distances_that_cannot_be_realised(tmp_path: Path) -> None:
+    def triangle_inequality(d: dict) -> None:
+        for v in d["vehicles"]:
+            v.pop("position")
+        d["vehicles"] = d["vehicles"][:3]
+        d["edges"] = [[1, 2, 1.0], [2, 3, 1.0], [3, 1, 3.0]]
+    refused(tmp_path, triangle_inequality, "edges[", "cannot be realised in the plane")
+
+
+def test_some_positions_missing(tmp_path: Path) -> None:
+    refused(tmp_path, lambda d: d["vehicles"][1].pop("position"), "vehicles[1].position",
+            "missing")
+
+
+def test_bad_edge_shape(tmp_path: Path) -> None:
+    def bad(d: dict) -> None:
+        d["edges"][0] = [1]
+    refused(tmp_path, bad, "edges[0]", "expected [tail, head]")
+
+
+def test_missing_airframe_file(tmp_path: Path) -> None:
+    refused(tmp_path, lambda d: d.update(airframe="nowhere.yaml"), "airframe", "not found")
+
+
+def test_out_of_range_bank(tmp_path: Path) -> None:
+    refused(tmp_path, lambda d: d["limits"].update(bank_deg=95), "limits.bank_deg",
+            "less than 90")
+
+
+def test_scale_range_must_bracket_one(tmp_path: Path) -> None:
+    refused(tmp_path, lambda d: d["guidance"].update(scale_min=1.2), "guidance",
+            "must bracket 1")
+
+
+def test_malformed_yaml(tmp_path: Path) -> None:
+    path = tmp_path / "broken.yaml"
+    path.write_text("name: x\nvehicles: [1, 2\n")
+    with pytest.raises(ConfigError, match=r"broken.yaml: line \d+: invalid YAML"):
+        load_team(path)
+
+
+def test_missing_file(tmp_path: Path) -> None:
+    with pytest.raises(ConfigError, match="cannot read file"):
+        load_team(tmp_path / "absent.yaml")

@@ -1,0 +1,145 @@
+"""The formation model and motion synthesis against the paper's equations."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gcs.config import load_team
+from gcs.formation import build_formation, is_infinitesimally_rigid
+from gcs.guidance import Guidance, MotionDemand, formation_acceleration, saturate
+from gcs.motion import centripetal_matrix, edges_to_slots, motion_basis
+
+SQUARE = "configs/bebop_square.yaml"
+
+# Eq. (B) of the paper, rows = vehicles 1..4, columns = z1..z6.
+PAPER_B = np.array([
+    [1, 0, 0, 1, 1, 0],
+    [-1, 1, 0, 0, 0, 1],
+    [0, 0, 1, 0, -1, -1],
+    [0, -1, -1, -1, 0, 0],
+])
+
+
+def test_square_incidence_is_eq_B() -> None:
+    f = load_team(SQUARE).formation
+    np.testing.assert_array_equal(f.incidence, PAPER_B)
+    np.testing.assert_allclose(f.distances, [1, np.sqrt(2), 1, 1, np.sqrt(2), 1])
+
+
+def test_rigidity() -> None:
+    square = np.array([[0.5, 0.5], [-0.5, 0.5], [-0.5, -0.5], [0.5, -0.5]])
+    ring = np.array([[0, 1], [1, 2], [2, 3], [3, 0]])
+    assert not is_infinitesimally_rigid(square, ring)  # a square without diagonals shears
+    assert is_infinitesimally_rigid(square, np.vstack([ring, [[0, 2]]]))
+    # collinear triangle: all distances kept to first order by a perpendicular motion
+    line = np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]])
+    assert not is_infinitesimally_rigid(line, np.array([[0, 1], [1, 2], [0, 2]]))
+
+
+def test_positions_realised_from_distances() -> None:
+    f = build_formation([1, 2, 3, 4], [(1, 2), (2, 3), (3, 4), (4, 1), (1, 3)],
+                        distances=[1.0, 1.0, 1.0, 1.0, np.sqrt(2)])
+    z = f.relative(f.positions)
+    np.testing.assert_allclose(np.linalg.norm(z, axis=1), [1, 1, 1, 1, np.sqrt(2)], atol=1e-6)
+    np.testing.assert_allclose(f.positions.mean(axis=0), 0, atol=1e-9)
+
+
+def test_translation_disagreements_reproduce_velocity() -> None:
+    f = load_team(SQUARE).formation
+    basis = motion_basis(f)
+    for A, want in ((basis.translate_x, [1.0, 0.0]), (basis.translate_y, [0.0, 1.0])):
+        np.testing.assert_allclose(basis.desired_velocities(A), np.tile(want, (4, 1)),
+                                   atol=1e-12)
+        # like the paper's A_v: a vehicle only uses its own edges
+        assert np.all(A[f.incidence == 0] == 0)
+
+
+def test_square_rotation_uses_the_sides_with_equal_disagreements() -> None:
+    """The paper's spin: each vehicle combines its two sides; the diagonal is radial."""
+    f = load_team(SQUARE).formation
+    R = motion_basis(f).rotate
+    diagonals = [1, 4]
+    np.testing.assert_allclose(R[:, diagonals], 0, atol=1e-12)
+    sides = np.abs(R[np.abs(R) > 1e-9])
+    np.testing.assert_allclose(sides, 0.5)  # omega * side / 2 per rad/s
+
+
+@pytest.mark.parametrize("vx, vy, omega", [(0.0, 0.0, 0.4), (0.5, -0.2, 0.3), (0.7, 0.1, 0.0)])
+def test_proposition_1_centripetal_term(vx: float, vy: float, omega: float) -> None:
+    """A_a zhat* equals the acceleration of the rigid motion: omega x v*."""
+    f = load_team(SQUARE).formation
+    basis = motion_basis(f)
+    A_v = basis.velocity_matrix(vx, vy, omega, 1.0)
+    z = f.relative(f.positions)
+    zhat = z / np.linalg.norm(z, axis=1, keepdims=True)
+    a = centripetal_matrix(A_v, f.incidence, f.distances) @ zhat
+    v = basis.desired_velocities(A_v)
+    np.testing.assert_allclose(a, omega * np.column_stack((-v[:, 1], v[:, 0])), atol=1e-12)
+
+
+def test_kernel_is_eq_udi_in_stacked_form() -> None:
+    """Per-vehicle kernel (lead 0) == u = -c1 v - c2 Bbar D_z D_ztilde e + Abar D_ztilde z."""
+    team = load_team(SQUARE)
+    f = team.formation
+    g = Guidance.from_team(team)
+    rng = np.random.default_rng(1)
+    p = f.positions + rng.normal(0, 0.15, f.positions.shape)
+    v = rng.normal(0, 0.5, p.shape)
+    c1, c2 = 0.17, 0.55
+    A = c1 * g.basis.velocity_matrix(0.3, 0.1, 0.2, 1.0)  # any A on the vehicles' own edges
+    z = f.relative(p)
+    nz = np.linalg.norm(z, axis=1)
+    e = nz - f.distances
+    unit = z / nz[:, None]
+    stacked = -c1 * v - c2 * f.incidence @ (unit * e[:, None]) + A @ unit
+    nb = f.slot_neighbour
+    rel_p = (p[nb] - p[:, None]) * f.slot_mask[..., None]
+    rel_v = (v[nb] - v[:, None]) * f.slot_mask[..., None]
+    half = edges_to_slots(f, A) / 2  # A split in any way between the two feed-forwards
+    u = formation_acceleration(v, rel_p, rel_v, f.slot_mask, f.distances[f.slot_edge],
+                               half, half, c1=c1, c2=c2, lead=0.0)
+    np.testing.assert_allclose(u, stacked, atol=1e-12)
+
+
+def test_steady_state_acceleration_is_the_centripetal_one() -> None:
+    """At the desired shape moving at v*, eq. udi commands exactly the rigid motion's accel."""
+    team = load_team(SQUARE)
+    g = Guidance.from_team(team)
+    f = g.formation
+    demand = MotionDemand(rotate=1.0)
+    omega = g.angular_rate(demand)
+    v = g.basis.desired_velocities(g.velocity_matrix(demand))
+    yaw = np.zeros(f.n)
+    # The held command is the one of half a period ahead: the team has turned by
+    # atan(omega T / 2) along its predicted (linear) path.
+    turn = np.arctan(omega * g.lead)
+    R = np.array([[np.cos(turn), -np.sin(turn)], [np.sin(turn), np.cos(turn)]])
+    u = g.accelerations(f.positions, v, yaw, demand)
+    np.testing.assert_allclose(u, -omega**2 * f.positions @ R.T, atol=1e-12)
+    g.lead = 0.0  # plain eq. udi: exactly the centripetal acceleration now
+    u = g.accelerations(f.positions, v, yaw, demand)
+    np.testing.assert_allclose(u, -omega**2 * f.positions, atol=1e-12)
+
+
+def test_saturation_in_norm_then_per_axis() -> None:
+    u = np.array([[3.0, 0.0], [2.0, 2.0], [0.1, -0.2], [-1.0, 1.8]])
+    s = saturate(u, norm_max=2.18, axis_max=1.54)
+    assert np.all(np.linalg.norm(s, axis=1) <= 2.18 + 1e-12)
+    assert np.all(np.abs(s) <= 1.54 + 1e-12)
+    np.testing.assert_allclose(s[2], u[2])  # small commands pass unchanged
+    np.testing.assert_allclose(s[1], [1.54, 1.54])  # direction kept at 45 degrees
+    assert s[0, 0] == pytest.approx(1.54)
+
+
+def test_motion_demand_rejects_out_of_range_sticks() -> None:
+    with pytest.raises(ValueError, match="forward"):
+        MotionDemand(forward=1.5)
+    with pytest.raises(ValueError, match="scale"):
+        MotionDemand(scale=0.0)
+
+
+def test_diagonal_stick_is_not_faster() -> None:
+    g = Guidance.from_team(load_team(SQUARE))
+    v = g.basis.desired_velocities(g.velocity_matrix(MotionDemand(forward=1.0, right=1.0)))
+    np.testing.assert_allclose(np.linalg.norm(v, axis=1), g.max_speed)

@@ -1,0 +1,132 @@
+"""Closed-loop behaviour of eq. udi on double integrators at 4 Hz with a zero-order hold."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gcs.config import load_team
+from gcs.guidance import Guidance, MotionDemand
+from tests.double_integrator import fly
+
+TEAMS = ["configs/bebop_square.yaml", "configs/bebop_triangle.yaml",
+         "configs/bebop_hexagon.yaml"]
+
+
+@pytest.fixture(params=TEAMS, ids=lambda p: p.split("/")[-1][:-5])
+def guidance(request: pytest.FixtureRequest) -> Guidance:
+    return Guidance.from_team(load_team(request.param))
+
+
+def worst_error(g: Guidance, p: np.ndarray, scale: float = 1.0) -> np.ndarray:
+    """Largest |e_k| at every tick of a trace (K, n, 2) -> (K,)."""
+    f = g.formation
+    z = p[:, f.edges[:, 0]] - p[:, f.edges[:, 1]]
+    return np.abs(np.linalg.norm(z, axis=2) - scale * f.distances).max(axis=1)
+
+
+def test_runs_at_configured_rate(guidance: Guidance) -> None:
+    assert guidance.period == pytest.approx(0.25)
+
+
+def test_shape_reached_from_perturbed_start_with_exponential_decay(guidance: Guidance) -> None:
+    rng = np.random.default_rng(7)
+    f = guidance.formation
+    p0 = f.positions + rng.uniform(-0.25, 0.25, f.positions.shape) + [3.0, -2.0]
+    v0 = rng.uniform(-0.2, 0.2, p0.shape)
+    tr = fly(guidance, p0, v0, MotionDemand(), duration=240.0)
+    err = worst_error(guidance, tr.p)
+    assert err[0] > 0.05
+    # Exponential decay: the envelope over successive 40 s windows shrinks by a
+    # steady factor, and the error ends orders of magnitude below the start.
+    windows = err[: (len(err) // 160) * 160].reshape(-1, 160).max(axis=1)
+    ratios = windows[1:] / windows[:-1]
+    assert np.all(ratios < 0.6), ratios
+    assert err[-1] < 1e-3 * err[0]
+    assert np.abs(tr.v[-1]).max() < 1e-3
+
+
+def test_translation_gives_commanded_velocity_and_keeps_shape(guidance: Guidance) -> None:
+    f = guidance.formation
+    demand = MotionDemand(forward=0.6, right=-0.3)
+    tr = fly(guidance, f.positions, np.zeros_like(f.positions), demand, duration=60.0)
+    want = np.array([0.6, -0.3]) * guidance.max_speed
+    v_end = tr.v[-1]
+    assert np.all(np.linalg.norm(v_end - want, axis=1) <= 0.02 * np.linalg.norm(want))
+    assert worst_error(guidance, tr.p)[-40:].max() < 0.01
+
+
+def test_translation_follows_the_team_body_frame(guidance: Guidance) -> None:
+    """The team is rotated by 60 degrees: 'forward' is the team's x, not north."""
+    f = guidance.formation
+    a = np.radians(60.0)
+    R = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    p0 = f.positions @ R.T
+    tr = fly(guidance, p0, np.zeros_like(p0), MotionDemand(forward=0.5), duration=60.0)
+    want = 0.5 * guidance.max_speed * R[:, 0]
+    assert np.all(np.linalg.norm(tr.v[-1] - want, axis=1) <= 0.02 * np.linalg.norm(want))
+
+
+def test_rotation_gives_commanded_rate_about_centroid(guidance: Guidance) -> None:
+    f = guidance.formation
+    demand = MotionDemand(rotate=1.0)
+    omega = guidance.angular_rate(demand)
+    assert omega > 0
+    tr = fly(guidance, f.positions, np.zeros_like(f.positions), demand, duration=150.0)
+    c = tr.p.mean(axis=1)
+    assert np.abs(c[-1] - c[0]).max() < 0.02  # spins about its centroid, does not drift
+    # Angular rate from the heading of vehicle 0 around the centroid over the last 20 s.
+    r = tr.p[:, 0] - c
+    ang = np.unwrap(np.arctan2(r[:, 1], r[:, 0]))
+    k = 80
+    rate = (ang[-1] - ang[-1 - k]) / (tr.t[-1] - tr.t[-1 - k])
+    assert rate == pytest.approx(omega, rel=0.02)
+    assert worst_error(guidance, tr.p)[-k:].max() < 0.01
+
+
+def test_scaling_reaches_scaled_shape(guidance: Guidance) -> None:
+    f = guidance.formation
+    for scale in (0.7, 1.4):
+        tr = fly(guidance, f.positions, np.zeros_like(f.positions), MotionDemand(scale=scale),
+                 duration=200.0)
+        assert worst_error(guidance, tr.p[:1], scale)[0] > 0.1
+        assert worst_error(guidance, tr.p, scale)[-1] < 0.005
+        # a scaled copy of the shape: every distance scales (rigid graph, not just edges)
+        p = tr.p[-1] - tr.p[-1].mean(axis=0)
+        d = np.linalg.norm(p[:, None] - p[None], axis=2)
+        d0 = np.linalg.norm(f.positions[:, None] - f.positions[None], axis=2)
+        assert np.allclose(d, scale * d0, atol=0.01)
+
+
+def test_combined_motion_keeps_shape(guidance: Guidance) -> None:
+    f = guidance.formation
+    demand = MotionDemand(forward=0.5, rotate=0.5)
+    tr = fly(guidance, f.positions, np.zeros_like(f.positions), demand, duration=150.0)
+    assert worst_error(guidance, tr.p)[-40:].max() < 0.01
+
+
+def test_translating_all_positions_changes_no_acceleration(guidance: Guidance) -> None:
+    rng = np.random.default_rng(3)
+    f = guidance.formation
+    p = f.positions + rng.normal(0, 0.1, f.positions.shape)
+    v = rng.normal(0, 0.3, p.shape)
+    yaw = rng.uniform(-np.pi, np.pi, f.n)
+    demand = MotionDemand(forward=0.3, right=0.2, rotate=-0.4, scale=1.1)
+    u = guidance.accelerations(p, v, yaw, demand)
+    u_shift = guidance.accelerations(p + [123.4, -56.7], v, yaw, demand)
+    assert np.abs(u).max() > 0.05
+    np.testing.assert_allclose(u_shift, u, atol=1e-9)
+
+
+def test_rotating_one_vehicle_frame_changes_no_physical_acceleration(guidance: Guidance) -> None:
+    rng = np.random.default_rng(4)
+    f = guidance.formation
+    p = f.positions + rng.normal(0, 0.1, f.positions.shape)
+    v = rng.normal(0, 0.3, p.shape)
+    demand = MotionDemand(forward=-0.4, rotate=0.7)
+    yaw = np.zeros(f.n)
+    u = guidance.accelerations(p, v, yaw, demand)
+    for i in range(f.n):
+        yaw_i = yaw.copy()
+        yaw_i[i] = 1.234
+        np.testing.assert_allclose(guidance.accelerations(p, v, yaw_i, demand), u, atol=1e-9)

@@ -1,0 +1,1 @@
+"""Onboard autopilot of a simulated rotorcraft: INDI control, modes, MAVLink endpoint."""

@@ -1,0 +1,1 @@
+"""The viser web application (scene, plots, operator controls, replay)."""
