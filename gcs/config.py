@@ -28,7 +28,9 @@ __all__ = [
     "EdgeSpec",
     "GuidanceConfig",
     "LimitsConfig",
+    "OperatorConfig",
     "PayloadConfig",
+    "SafetyConfig",
     "Team",
     "TeamConfig",
     "VehicleSpec",
@@ -123,6 +125,44 @@ class AnalysisConfig:
 
 
 @dataclass(frozen=True)
+class OperatorConfig:
+    """How operator inputs (browser, gamepad, script) are shaped."""
+
+    deadzone: float = field(doc="stick deadzone, fraction of full travel", default=0.05,
+                            ge=0.0, lt=1.0)
+    expo: float = field(doc="stick expo (0 linear, 1 cubic)", default=0.3, ge=0.0, le=1.0)
+    stick_timeout: float = field(doc="sticks fall back to zero this long after the last "
+                                 "input from a source, s", default=1.0, gt=0.0)
+    altitude_rate: float = field(doc="largest rate of the altitude target, m/s", default=0.3,
+                                 gt=0.0)
+    altitude_min: float = field(doc="lowest altitude target above the ground, m", default=0.0,
+                                ge=0.0)
+    altitude_max: float = field(doc="highest altitude target above the ground, m", default=4.0,
+                                gt=0.0)
+    altitude_step: float = field(doc="altitude change per operator step, m", default=0.1,
+                                 gt=0.0)
+
+
+@dataclass(frozen=True)
+class SafetyConfig:
+    """Safety rules of the GCS loop (each enforced in gcs/safety.py)."""
+
+    stale_after: float = field(doc="telemetry older than this freezes the motion, s",
+                               default=0.5, gt=0.0)
+    land_after: float = field(doc="a vehicle silent this long lands the team, s", default=3.0,
+                              gt=0.0)
+    geofence_xy: float = field(doc="half-size of the horizontal geofence box around the "
+                               "origin, m", default=4.0, gt=0.0)
+    geofence_altitude: float = field(doc="highest altitude above the ground, m", default=4.0,
+                                     gt=0.0)
+
+    def __post_init__(self) -> None:
+        if self.land_after < self.stale_after:
+            raise ValueError(f"safety.land_after ({self.land_after:g} s) must not be shorter "
+                             f"than safety.stale_after ({self.stale_after:g} s)")
+
+
+@dataclass(frozen=True)
 class TeamConfig:
     """Everything that defines one team; see configs/bebop_square.yaml."""
 
@@ -135,6 +175,9 @@ class TeamConfig:
     payload: PayloadConfig = field(doc="payload and ropes")
     analysis: AnalysisConfig = field(doc="worst-case analysis assumptions",
                                      default_factory=AnalysisConfig)
+    operator: OperatorConfig = field(doc="operator input shaping",
+                                     default_factory=OperatorConfig)
+    safety: SafetyConfig = field(doc="safety rules", default_factory=SafetyConfig)
 
 
 @dataclass(frozen=True, eq=False)

@@ -1,0 +1,80 @@
+"""Clocks: where every loop takes its time from.
+
+Interactive runs use the wall clock; headless runs follow the simulator's clock
+(published on zenoh), so a flight played faster than real time gives the same
+result, as ROS ``use_sim_time`` or PX4 lockstep do.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from typing import Protocol
+
+__all__ = ["Clock", "ClockStopped", "ExternalClock", "WallClock"]
+
+
+class ClockStopped(RuntimeError):
+    """The clock's source went away while a loop was waiting on it."""
+
+
+class Clock(Protocol):
+    """Seconds on some time base; ``sleep_until`` blocks until that time (or raises)."""
+
+    def now(self) -> float: ...
+
+    def sleep_until(self, t: float) -> None: ...
+
+
+class WallClock:
+    """Monotonic wall-clock time, seconds since creation."""
+
+    def __init__(self) -> None:
+        self._t0 = time.monotonic()
+
+    def now(self) -> float:
+        return time.monotonic() - self._t0
+
+    def sleep_until(self, t: float) -> None:
+        delay = t - self.now()
+        if delay > 0:
+            time.sleep(delay)
+
+
+class ExternalClock:
+    """Time pushed by another process (the simulator's clock).
+
+    ``advance(t)`` is called when a clock sample arrives; waiting loops wake up.
+    If no sample arrives for ``timeout`` wall seconds, ``sleep_until`` raises
+    :class:`ClockStopped` instead of hanging forever.
+    """
+
+    def __init__(self, *, timeout: float = 5.0) -> None:
+        self._t = 0.0
+        self._cond = threading.Condition()
+        self._timeout = timeout
+        self._closed = False
+
+    def advance(self, t: float) -> None:
+        with self._cond:
+            if t > self._t:
+                self._t = t
+                self._cond.notify_all()
+
+    def close(self) -> None:
+        with self._cond:
+            self._closed = True
+            self._cond.notify_all()
+
+    def now(self) -> float:
+        with self._cond:
+            return self._t
+
+    def sleep_until(self, t: float) -> None:
+        with self._cond:
+            while self._t < t:
+                if self._closed:
+                    raise ClockStopped("the simulator clock was closed")
+                if not self._cond.wait(self._timeout):
+                    raise ClockStopped(f"no simulator clock sample for {self._timeout:g} s "
+                                       f"(stuck at t = {self._t:.3f} s)")

@@ -1,0 +1,152 @@
+"""The operator's command: one object written by any source, read by the 4 Hz loop.
+
+The browser, the gamepad and scripted scenarios all write here, through the
+same methods, so they behave the same way: sticks get a deadzone and expo;
+scale moves in steps within the configured range; the altitude target is
+followed at a limited rate; guidance can be switched off. Sticks written by a
+source that then goes quiet fall back to zero after ``stick_timeout`` (a
+browser tab closed with a stick held must not keep the team moving).
+
+Thread-safe: sources write from their own threads, the loop takes a
+:class:`OperatorSnapshot` per tick.
+"""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass
+
+import numpy as np
+
+from gcs.config import GuidanceConfig, OperatorConfig
+from gcs.guidance import MotionDemand
+
+__all__ = ["OperatorCommand", "OperatorSnapshot", "shape_stick"]
+
+
+def shape_stick(value: float, *, deadzone: float, expo: float) -> float:
+    """Deadzone then expo: ``(1 - expo) x + expo x^3`` on the rescaled travel, in [-1, 1]."""
+    x = float(np.clip(value, -1.0, 1.0))
+    mag = abs(x)
+    if mag <= deadzone:
+        return 0.0
+    x = np.sign(x) * (mag - deadzone) / (1.0 - deadzone)
+    return float((1.0 - expo) * x + expo * x**3)
+
+
+@dataclass(frozen=True)
+class OperatorSnapshot:
+    """What the loop uses in one tick."""
+
+    demand: MotionDemand
+    altitude: float  # rate-limited altitude target above the ground, m
+    altitude_target: float  # where the operator wants to go, m
+    guidance_on: bool
+    source: str  # who wrote the sticks last
+
+
+class OperatorCommand:
+    """Sticks, scale, altitude and guidance switch of the super-vehicle.
+
+    Args:
+        operator: input shaping config.
+        guidance: scale range and step.
+        now: time of creation on the loop's clock, s.
+    """
+
+    def __init__(self, operator: OperatorConfig, guidance: GuidanceConfig, *,
+                 now: float = 0.0) -> None:
+        self._cfg = operator
+        self._g = guidance
+        self._lock = threading.Lock()
+        self._sticks = (0.0, 0.0, 0.0)
+        self._stick_time = now
+        self._source = "none"
+        self._scale = 1.0
+        self._alt_target = 0.0
+        self._alt = 0.0
+        self._alt_time = now
+        self._guidance_on = True
+
+    def set_sticks(self, forward: float, right: float, rotate: float, *, now: float,
+                   source: str = "script") -> None:
+        """Raw stick positions in [-1, 1] (values outside are clipped)."""
+        for name, value in (("forward", forward), ("right", right), ("rotate", rotate)):
+            if not np.isfinite(value):
+                raise ValueError(f"operator stick {name} from {source} is not a number: {value}")
+        c = self._cfg
+        shaped = tuple(shape_stick(v, deadzone=c.deadzone, expo=c.expo)
+                       for v in (forward, right, rotate))
+        with self._lock:
+            self._sticks = shaped  # type: ignore[assignment]
+            self._stick_time = now
+            self._source = source
+
+    def set_scale(self, scale: float) -> float:
+        """Scale of the shape, clipped to the configured range; returns the value kept."""
+        if not np.isfinite(scale):
+            raise ValueError(f"operator scale is not a number: {scale}")
+        with self._lock:
+            self._scale = float(np.clip(scale, self._g.scale_min, self._g.scale_max))
+            return self._scale
+
+    def step_scale(self, steps: int) -> float:
+        """Grow (+) or shrink (-) the shape by whole configured steps."""
+        with self._lock:
+            current = self._scale
+        return self.set_scale(round(current + steps * self._g.scale_step, 6))
+
+    def set_altitude(self, altitude: float, *, now: float) -> float:
+        """Altitude target above the ground, m; followed at the configured rate."""
+        if not np.isfinite(altitude):
+            raise ValueError(f"operator altitude is not a number: {altitude}")
+        with self._lock:
+            self._advance(now)
+            self._alt_target = float(np.clip(altitude, self._cfg.altitude_min,
+                                             self._cfg.altitude_max))
+            return self._alt_target
+
+    def step_altitude(self, steps: int, *, now: float) -> float:
+        """Raise (+) or lower (-) the altitude target by whole configured steps."""
+        with self._lock:
+            target = self._alt_target
+        return self.set_altitude(target + steps * self._cfg.altitude_step, now=now)
+
+    def reset_altitude(self, altitude: float, *, now: float) -> None:
+        """Jump both target and ramp to ``altitude`` (e.g. after take-off)."""
+        with self._lock:
+            self._alt = self._alt_target = float(altitude)
+            self._alt_time = now
+
+    def set_guidance(self, on: bool) -> None:
+        """Switch the formation motion on or off (off: the team holds its shape)."""
+        with self._lock:
+            self._guidance_on = bool(on)
+
+    def release(self, *, now: float, source: str = "system") -> None:
+        """Centre all sticks (abort, loss of control source)."""
+        with self._lock:
+            self._sticks = (0.0, 0.0, 0.0)
+            self._stick_time = now
+            self._source = source
+
+    def _advance(self, now: float) -> None:
+        dt = max(0.0, now - self._alt_time)
+        step = self._cfg.altitude_rate * dt
+        self._alt += float(np.clip(self._alt_target - self._alt, -step, step))
+        self._alt_time = now
+
+    def snapshot(self, now: float) -> OperatorSnapshot:
+        """The command for the tick at ``now`` (advances the altitude ramp)."""
+        with self._lock:
+            self._advance(now)
+            sticks = self._sticks
+            if now - self._stick_time > self._cfg.stick_timeout:
+                sticks = (0.0, 0.0, 0.0)
+            if not self._guidance_on:
+                sticks = (0.0, 0.0, 0.0)
+            demand = MotionDemand(forward=sticks[0], right=sticks[1], rotate=sticks[2],
+                                  scale=self._scale)
+            return OperatorSnapshot(demand=demand, altitude=self._alt,
+                                    altitude_target=self._alt_target,
+                                    guidance_on=self._guidance_on, source=self._source)

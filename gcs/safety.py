@@ -1,0 +1,110 @@
+"""Safety rules of the GCS loop, each enforced here and nowhere else.
+
+Every tick the loop asks :func:`evaluate` what the team may do:
+
+* telemetry of a vehicle older than ``stale_after`` (0.5 s): the motion
+  freezes (shape kept, disagreements zero) and the vehicle is reported;
+* a vehicle silent for ``land_after``: the whole team lands;
+* a vehicle outside the geofence (horizontal box or ceiling): the motion freezes;
+* a vehicle farther from the team's centroid than the analysis' safe bound
+  (beyond it the ropes pull harder than the horizontal force left at the bank
+  limit minus the largest commanded acceleration): the motion freezes.
+
+Acceleration saturation lives in :func:`gcs.guidance.saturate`, the bank limit
+on board the vehicles. An unknown vehicle state (NaN) never raises here: it is
+reported as stale.
+"""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from gcs.config import SafetyConfig
+
+__all__ = ["SafetyEvent", "SafetyReason", "SafetyVerdict", "evaluate"]
+
+
+class SafetyReason(enum.Enum):
+    """Why the motion was frozen or the team sent to land."""
+
+    STALE = "telemetry is stale"
+    LOST = "link lost"
+    GEOFENCE = "outside the geofence"
+    DEFORMATION = "deformed beyond the safe bound"
+
+    def __str__(self) -> str:
+        return self.value
+
+
+@dataclass(frozen=True)
+class SafetyEvent:
+    """One rule that fired for one vehicle."""
+
+    reason: SafetyReason
+    vehicle: int
+    text: str
+
+
+@dataclass(frozen=True)
+class SafetyVerdict:
+    """What the team may do this tick."""
+
+    freeze: bool
+    land: bool
+    events: tuple[SafetyEvent, ...]
+
+
+_OK = SafetyVerdict(freeze=False, land=False, events=())
+
+
+def evaluate(cfg: SafetyConfig, ids: Sequence[int], age: np.ndarray, p_ned: np.ndarray, *,
+             safe_radius: float) -> SafetyVerdict:
+    """Apply every rule to the team's latest state.
+
+    Args:
+        cfg: the rules' thresholds.
+        ids: vehicle system ids, in formation order.
+        age: (n,) age of each vehicle's latest position, s (inf if never heard).
+        p_ned: (n, 3) latest NED positions, m (NaN where unknown).
+        safe_radius: largest horizontal distance of a vehicle from the team's
+            centroid (the analysis' safe span / 2), m.
+    """
+    events: list[SafetyEvent] = []
+    land = False
+    fresh = np.isfinite(age) & (age <= cfg.stale_after) & np.all(np.isfinite(p_ned), axis=1)
+    for i, vid in enumerate(ids):
+        if age[i] > cfg.land_after:
+            land = True
+            events.append(SafetyEvent(SafetyReason.LOST, vid,
+                                      f"vehicle {vid}: {_silent(age[i])}: landing the team"))
+        elif not fresh[i]:
+            events.append(SafetyEvent(SafetyReason.STALE, vid,
+                                      f"vehicle {vid}: {_silent(age[i])}: motion frozen"))
+    if fresh.any():
+        p = p_ned[fresh]
+        fresh_ids = [vid for vid, ok in zip(ids, fresh, strict=True) if ok]
+        for vid, (x, y, z) in zip(fresh_ids, p, strict=True):
+            if max(abs(x), abs(y)) > cfg.geofence_xy or -z > cfg.geofence_altitude:
+                events.append(SafetyEvent(SafetyReason.GEOFENCE, vid,
+                                          f"vehicle {vid}: at ({x:.2f}, {y:.2f}, {-z:.2f}) m, "
+                                          f"outside the geofence: motion frozen"))
+        if fresh.all():
+            r = np.linalg.norm(p[:, :2] - p[:, :2].mean(axis=0), axis=1)
+            for vid, ri in zip(fresh_ids, r, strict=True):
+                if ri > safe_radius:
+                    events.append(SafetyEvent(SafetyReason.DEFORMATION, vid,
+                                              f"vehicle {vid}: {ri:.2f} m from the centroid, "
+                                              f"safe bound {safe_radius:.2f} m: motion frozen"))
+    if not events:
+        return _OK
+    return SafetyVerdict(freeze=True, land=land, events=tuple(events))
+
+
+def _silent(seconds: float) -> str:
+    if not np.isfinite(seconds):
+        return "never heard from"
+    return f"no fresh telemetry for {seconds:.2f} s"

@@ -1,0 +1,108 @@
+"""Operator command shaping and the safety rules."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gcs.config import GuidanceConfig, OperatorConfig, SafetyConfig
+from gcs.operator import OperatorCommand, shape_stick
+from gcs.safety import SafetyReason, evaluate
+
+OP = OperatorConfig(deadzone=0.1, expo=0.5, stick_timeout=1.0, altitude_rate=0.5,
+                    altitude_max=3.0, altitude_step=0.25)
+GUI = GuidanceConfig(c1=0.17, c2=0.55, scale_min=0.5, scale_max=1.5, scale_step=0.05)
+
+
+def test_deadzone_and_expo() -> None:
+    assert shape_stick(0.05, deadzone=0.1, expo=0.5) == 0.0
+    assert shape_stick(1.0, deadzone=0.1, expo=0.5) == pytest.approx(1.0)
+    assert shape_stick(-1.0, deadzone=0.1, expo=0.5) == pytest.approx(-1.0)
+    assert shape_stick(3.0, deadzone=0.1, expo=0.5) == pytest.approx(1.0)
+    half = shape_stick(0.55, deadzone=0.1, expo=0.5)
+    assert half == pytest.approx(0.5 * 0.5 + 0.5 * 0.125)
+    assert shape_stick(-0.55, deadzone=0.1, expo=0.5) == pytest.approx(-half)
+
+
+def test_sticks_scale_and_timeout() -> None:
+    op = OperatorCommand(OP, GUI, now=0.0)
+    op.set_sticks(1.0, 0.0, -1.0, now=0.0, source="browser")
+    snap = op.snapshot(0.5)
+    assert (snap.demand.forward, snap.demand.rotate) == (pytest.approx(1.0), pytest.approx(-1.0))
+    assert snap.source == "browser"
+    assert op.snapshot(1.5).demand.forward == 0.0  # source went quiet
+    assert op.step_scale(+3) == pytest.approx(1.15)
+    assert op.step_scale(+100) == pytest.approx(1.5)
+    assert op.set_scale(0.1) == pytest.approx(0.5)
+    with pytest.raises(ValueError, match="forward from pad"):
+        op.set_sticks(float("nan"), 0, 0, now=1.0, source="pad")
+
+
+def test_altitude_is_rate_limited() -> None:
+    op = OperatorCommand(OP, GUI, now=0.0)
+    op.set_altitude(2.0, now=0.0)
+    assert op.snapshot(1.0).altitude == pytest.approx(0.5)
+    assert op.snapshot(10.0).altitude == pytest.approx(2.0)
+    assert op.set_altitude(9.0, now=10.0) == pytest.approx(3.0)  # clipped to the ceiling
+    op.step_altitude(-2, now=10.0)
+    assert op.snapshot(20.0).altitude == pytest.approx(2.5)
+
+
+def test_guidance_off_zeroes_motion() -> None:
+    op = OperatorCommand(OP, GUI, now=0.0)
+    op.set_sticks(0.8, 0.8, 0.8, now=0.0)
+    op.set_guidance(False)
+    snap = op.snapshot(0.1)
+    assert not snap.guidance_on
+    assert (snap.demand.forward, snap.demand.right, snap.demand.rotate) == (0.0, 0.0, 0.0)
+
+
+SAFE = SafetyConfig(stale_after=0.5, land_after=3.0, geofence_xy=4.0, geofence_altitude=3.0)
+IDS = [1, 2, 3, 4]
+SQUARE = np.array([[0.5, 0.5, -1.0], [-0.5, 0.5, -1.0], [-0.5, -0.5, -1.0], [0.5, -0.5, -1.0]])
+
+
+def test_all_fresh_and_inside_is_ok() -> None:
+    v = evaluate(SAFE, IDS, np.full(4, 0.1), SQUARE, safe_radius=0.79)
+    assert not v.freeze and not v.land and v.events == ()
+
+
+def test_stale_vehicle_freezes_and_is_named() -> None:
+    v = evaluate(SAFE, IDS, np.array([0.1, 0.7, 0.1, 0.1]), SQUARE, safe_radius=0.79)
+    assert v.freeze and not v.land
+    assert [(e.reason, e.vehicle) for e in v.events] == [(SafetyReason.STALE, 2)]
+
+
+def test_lost_vehicle_lands_the_team() -> None:
+    age = np.array([0.1, 0.1, np.inf, 3.5])
+    v = evaluate(SAFE, IDS, age, SQUARE, safe_radius=0.79)
+    assert v.freeze and v.land
+    assert {(e.reason, e.vehicle) for e in v.events} == {(SafetyReason.LOST, 3),
+                                                         (SafetyReason.LOST, 4)}
+    assert "never heard from" in v.events[0].text
+
+
+def test_geofence() -> None:
+    p = SQUARE.copy()
+    p[3, 0] = 4.2
+    v = evaluate(SAFE, IDS, np.full(4, 0.1), p, safe_radius=10.0)
+    assert v.freeze and [e.vehicle for e in v.events] == [4]
+    p = SQUARE.copy()
+    p[1, 2] = -3.5
+    v = evaluate(SAFE, IDS, np.full(4, 0.1), p, safe_radius=10.0)
+    assert v.events[0].reason is SafetyReason.GEOFENCE
+
+
+def test_deformation_beyond_safe_bound_freezes() -> None:
+    p = SQUARE.copy()
+    p[0, :2] = [1.0, 1.0]
+    v = evaluate(SAFE, IDS, np.full(4, 0.1), p, safe_radius=0.79)
+    assert v.freeze and not v.land
+    assert v.events[0].reason is SafetyReason.DEFORMATION and v.events[0].vehicle == 1
+
+
+def test_unknown_position_does_not_raise() -> None:
+    p = SQUARE.copy()
+    p[2] = np.nan
+    v = evaluate(SAFE, IDS, np.full(4, 0.1), p, safe_radius=0.79)
+    assert v.freeze and v.events[0].reason is SafetyReason.STALE
