@@ -11,10 +11,10 @@ import threading
 import time
 from typing import Protocol
 
-__all__ = ["Clock", "ClockStopped", "ExternalClock", "WallClock"]
+__all__ = ["Clock", "ClockStoppedError", "ExternalClock", "WallClock"]
 
 
-class ClockStopped(RuntimeError):
+class ClockStoppedError(RuntimeError):
     """The clock's source went away while a loop was waiting on it."""
 
 
@@ -46,7 +46,7 @@ class ExternalClock:
 
     ``advance(t)`` is called when a clock sample arrives; waiting loops wake up.
     If no sample arrives for ``timeout`` wall seconds, ``sleep_until`` raises
-    :class:`ClockStopped` instead of hanging forever.
+    :class:`ClockStoppedError` instead of hanging forever.
     """
 
     def __init__(self, *, timeout: float = 5.0) -> None:
@@ -74,7 +74,7 @@ class ExternalClock:
         with self._cond:
             while self._t < t:
                 if self._closed:
-                    raise ClockStopped("the simulator clock was closed")
+                    raise ClockStoppedError("the simulator clock was closed")
                 if not self._cond.wait(self._timeout):
-                    raise ClockStopped(f"no simulator clock sample for {self._timeout:g} s "
+                    raise ClockStoppedError(f"no simulator clock sample for {self._timeout:g} s "
                                        f"(stuck at t = {self._t:.3f} s)")
