@@ -1,0 +1,71 @@
+"""Link health of one vehicle: is it alive, what is lost, what is refused, how slow.
+
+Packet loss is read from MAVLink sequence numbers per (system, component)
+stream, the way ground stations do it: a jump from 10 to 14 means 3 frames
+never arrived. Refused frames are those that arrived but were not believed:
+bad checksum, bad or missing signature on a signed link, or another system id.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["LinkHealth", "SequenceTracker"]
+
+
+@dataclass(frozen=True)
+class LinkHealth:
+    """Snapshot of one link's health."""
+
+    sysid: int
+    heartbeat_age_s: float | None
+    """Time since the vehicle's last HEARTBEAT, s; None if none arrived."""
+    alive: bool
+    """True while the heartbeat is younger than the link's heartbeat timeout."""
+    frames_received: int
+    """Frames accepted from the vehicle."""
+    frames_sent: int
+    packets_lost: int
+    """Frames missing from the vehicle's sequence numbers."""
+    refused_bad_crc: int
+    """Candidate frames with a wrong checksum (corrupted bytes)."""
+    refused_signature: int
+    """Frames refused by signing: unsigned, wrongly signed or replayed."""
+    refused_wrong_system: int
+    """Good frames from a system id other than the vehicle's, ignored."""
+    foreign_systems: tuple[int, ...]
+    """System ids seen on this link that are not the vehicle's."""
+    garbage_bytes: int
+    """Bytes that were not part of any frame."""
+    truncated: int
+    """Frames cut short."""
+    rtt_s: float | None
+    """Latest round-trip time (COMMAND_ACK or TIMESYNC), s."""
+
+    @property
+    def refused(self) -> int:
+        """All refused frames."""
+        return self.refused_bad_crc + self.refused_signature + self.refused_wrong_system
+
+    @property
+    def loss_ratio(self) -> float:
+        """Fraction of the vehicle's frames that were lost (0 with no traffic)."""
+        total = self.frames_received + self.packets_lost
+        return self.packets_lost / total if total else 0.0
+
+
+class SequenceTracker:
+    """Counts frames missing from per-stream sequence numbers; not thread-safe."""
+
+    def __init__(self) -> None:
+        self._last: dict[tuple[int, int], int] = {}
+        self.lost = 0
+        """Frames inferred lost so far."""
+
+    def update(self, sysid: int, compid: int, seq: int) -> None:
+        """Account one received frame."""
+        key = (sysid, compid)
+        last = self._last.get(key)
+        self._last[key] = seq
+        if last is not None and seq != last:  # an equal number is a duplicate, not a loss
+            self.lost += (seq - last - 1) & 0xFF

@@ -1,0 +1,152 @@
+"""All of the GCS's links, opened from configuration and closed together.
+
+:class:`LinkManager` builds one transport, :class:`~gcs.link.link.Link` and
+autopilot profile per configured vehicle, shares one zenoh session among the
+zenoh links, and feeds :class:`~gcs.link.discovery.Discovery` from zenoh
+liveliness tokens and from the links' heartbeats.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import threading
+import time
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from types import MappingProxyType
+
+import zenoh
+
+from gcs.link.config import ZENOH, GcsLinkConfig, LinkConfig, check_links
+from gcs.link.discovery import Discovery, PresenceEvent, PresenceSource
+from gcs.link.errors import LinkError
+from gcs.link.link import Link
+from gcs.link.mavutil_transport import MavutilTransport
+from gcs.link.profile import AutopilotProfile
+from gcs.link.profiles import make_profile
+from gcs.link.signing import SigningKey, load_signing_key
+from gcs.link.transport import Transport
+from gcs.link.zenoh_session import open_session
+from gcs.link.zenoh_transport import ZenohTransport, watch_alive
+
+__all__ = ["LinkManager"]
+
+
+class LinkManager:
+    """Opens every configured link at construction; use as a context manager or call close()."""
+
+    def __init__(self, links: Sequence[LinkConfig], *, settings: GcsLinkConfig | None = None,
+                 base_dir: str | Path = ".", session: zenoh.Session | None = None,
+                 clock: Callable[[], float] = time.monotonic,
+                 on_presence: Callable[[PresenceEvent], None] | None = None,
+                 check_period_s: float = 0.1) -> None:
+        self._settings = settings if settings is not None else GcsLinkConfig()
+        check_links(links, gcs_system_id=self._settings.system_id, source="<links>")
+        self._base_dir = Path(base_dir)
+        self._clock = clock
+        self._check_period_s = check_period_s
+        self.discovery = Discovery((c.sysid for c in links), clock=clock, on_event=on_presence)
+        """Presence of the vehicles."""
+        self._owns_session = False
+        self._session = session
+        self._links: dict[int, Link] = {}
+        self._profiles: dict[int, AutopilotProfile] = {}
+        self._watcher: zenoh.Subscriber | None = None
+        self._stop = threading.Event()
+        self._checker: threading.Thread | None = None
+        # Configuration errors (key files) before any port or session is opened.
+        keys = {c.sysid: self._load_key(c) for c in links}
+        try:
+            if any(c.transport == ZENOH for c in links):
+                if self._session is None:
+                    self._session = open_session(self._settings.zenoh)
+                    self._owns_session = True
+                self._watcher = watch_alive(
+                    self._session, fleet=self._settings.fleet,
+                    on_change=lambda sysid, up: self.discovery.report(
+                        sysid, up, PresenceSource.LIVELINESS))
+            for config in links:
+                link = self._open(config, keys[config.sysid])
+                self._links[config.sysid] = link
+                self._profiles[config.sysid] = make_profile(config.profile, link)
+        except BaseException:
+            self.close()
+            raise
+        self._checker = threading.Thread(target=self._check_loop, daemon=True,
+                                         name="link-presence")
+        self._checker.start()
+
+    @property
+    def links(self) -> Mapping[int, Link]:
+        """Link per vehicle system id (read-only view)."""
+        return MappingProxyType(self._links)
+
+    @property
+    def profiles(self) -> Mapping[int, AutopilotProfile]:
+        """Autopilot profile per vehicle system id (read-only view)."""
+        return MappingProxyType(self._profiles)
+
+    @property
+    def session(self) -> zenoh.Session | None:
+        """The zenoh session, if any link uses zenoh."""
+        return self._session
+
+    def missing(self) -> tuple[int, ...]:
+        """Configured vehicles not present (see :meth:`Discovery.missing`)."""
+        return self.discovery.missing()
+
+    def close(self) -> None:
+        """Close every link, the presence watch and an owned zenoh session; idempotent."""
+        self._stop.set()
+        if self._checker is not None:
+            self._checker.join(timeout=2.0)
+        for link in self._links.values():
+            link.close()
+        if self._watcher is not None:
+            with contextlib.suppress(zenoh.ZError):  # session already closed
+                self._watcher.undeclare()
+            self._watcher = None
+        if self._owns_session and self._session is not None:
+            self._session.close()
+            self._session = None
+
+    def __enter__(self) -> LinkManager:
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.close()
+
+    def _load_key(self, config: LinkConfig) -> SigningKey | None:
+        path = config.signing_key_path(self._base_dir)
+        return load_signing_key(path) if path is not None else None
+
+    def _open(self, config: LinkConfig, key: SigningKey | None) -> Link:
+        transport: Transport
+        if config.transport == ZENOH:
+            assert self._session is not None
+            transport = ZenohTransport.for_gcs(self._session, fleet=self._settings.fleet,
+                                               sysid=config.sysid)
+        else:
+            try:
+                transport = MavutilTransport(config.transport, baud=config.baud)
+            except (RuntimeError, ValueError) as exc:
+                raise LinkError(config.sysid, str(exc)) from None
+        try:
+            link = Link(config.sysid, transport, gcs_system_id=self._settings.system_id,
+                        gcs_component_id=self._settings.component_id,
+                        target_component=config.component_id, signing_key=key,
+                        signing_link_id=config.signing_link_id, clock=self._clock,
+                        command_timeout_s=config.command_timeout_s,
+                        command_retries=config.command_retries,
+                        heartbeat_timeout_s=config.heartbeat_timeout_s,
+                        gcs_heartbeat_period_s=self._settings.heartbeat_period_s,
+                        timesync_period_s=self._settings.timesync_period_s)
+            return link.start()
+        except BaseException:
+            transport.close()
+            raise
+
+    def _check_loop(self) -> None:
+        while not self._stop.wait(self._check_period_s):
+            for sysid, link in list(self._links.items()):
+                self.discovery.report(sysid, link.health.alive, PresenceSource.HEARTBEAT)

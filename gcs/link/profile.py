@@ -1,0 +1,149 @@
+"""Autopilot profiles: how each kind of vehicle is armed, launched, switched and landed.
+
+The GCS loop is the same for every vehicle; what differs between the
+simulated vehicles, PX4 and ArduPilot is the order of commands and the
+setpoint channels. A profile is bound to one :class:`~gcs.link.link.Link`.
+Every step waits for ``COMMAND_ACK`` (with the link's retries) and then for
+the HEARTBEAT to confirm the new state, so a call that returns has happened.
+All methods block; run them off the 4 Hz loop's thread.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from enum import Enum
+from typing import Protocol
+
+from gcs.link.dialect import mavlink
+from gcs.link.errors import LinkError
+from gcs.link.link import Link
+from gcs.link.modes import CUSTOM_MODE_ENABLED
+from gcs.link.setpoints import SetpointKind
+from gcs.link.telemetry import Heartbeat, LocalPosition, Telemetry
+
+__all__ = ["AutopilotProfile", "ProfileBase", "ProfileName"]
+
+
+class ProfileName(Enum):
+    """Autopilot kinds a link can be configured with."""
+
+    SIM = "sim"
+    PX4 = "px4"
+    ARDUPILOT = "ardupilot"
+
+    @property
+    def text(self) -> str:
+        """Readable name."""
+        return {"sim": "simulated vehicle", "px4": "PX4", "ardupilot": "ArduPilot"}[self.value]
+
+
+class AutopilotProfile(Protocol):
+    """What the GCS can ask of any vehicle, whatever its autopilot."""
+
+    @property
+    def name(self) -> ProfileName:
+        """Which autopilot this profile drives."""
+        ...
+
+    @property
+    def link(self) -> Link:
+        """The vehicle's link."""
+        ...
+
+    @property
+    def setpoint_kind(self) -> SetpointKind:
+        """Channels of the setpoints this profile sends."""
+        ...
+
+    def mode_text(self) -> str:
+        """Current flight mode from the latest HEARTBEAT, readable (``"unknown"`` if none)."""
+        ...
+
+    def arm(self) -> None:
+        """Arm the motors and wait until the HEARTBEAT says armed."""
+        ...
+
+    def disarm(self) -> None:
+        """Disarm and wait until the HEARTBEAT says disarmed."""
+        ...
+
+    def takeoff(self, *, altitude_m: float) -> None:
+        """Arm and climb ``altitude_m`` above the current position; returns once the climb began."""
+        ...
+
+    def start_offboard(self, *, z_ned: float | None = None) -> None:
+        """Hand control to GCS setpoints, holding ``z_ned`` (default: current z) meanwhile.
+
+        From then on the caller must keep sending setpoints at more than 2 Hz.
+        """
+        ...
+
+    def send_setpoint(self, *, accel_xy_ned: tuple[float, float], z_ned: float) -> None:
+        """Send horizontal acceleration (m/s^2) and the z to hold (down, m); non-blocking."""
+        ...
+
+    def land(self) -> None:
+        """Land where the vehicle is."""
+        ...
+
+
+class ProfileBase:
+    """Steps shared by all profiles: arming, confirmed mode changes, autopilot check."""
+
+    expected_autopilots: frozenset[int] = frozenset()
+    """``MAV_AUTOPILOT`` values this profile can drive."""
+
+    def __init__(self, link: Link, *, confirm_timeout_s: float = 3.0) -> None:
+        self._link = link
+        self._confirm_timeout_s = confirm_timeout_s
+
+    @property
+    def link(self) -> Link:
+        """The vehicle's link."""
+        return self._link
+
+    def arm(self) -> None:
+        """MAV_CMD_COMPONENT_ARM_DISARM(1), confirmed by the HEARTBEAT."""
+        self._check_autopilot()
+        self._link.command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (1.0,))
+        self._wait_heartbeat(lambda hb: hb.armed, "the vehicle to report armed")
+
+    def disarm(self) -> None:
+        """MAV_CMD_COMPONENT_ARM_DISARM(0), confirmed by the HEARTBEAT."""
+        self._link.command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (0.0,))
+        self._wait_heartbeat(lambda hb: not hb.armed, "the vehicle to report disarmed")
+
+    def _set_mode(self, main: int, sub: int = 0, *, what: str) -> None:
+        """MAV_CMD_DO_SET_MODE with custom mode (main, sub), confirmed by the HEARTBEAT."""
+        self._link.command_long(mavlink.MAV_CMD_DO_SET_MODE,
+                                (float(CUSTOM_MODE_ENABLED), float(main), float(sub)))
+        self._wait_heartbeat(lambda hb: self._mode_is(hb, main, sub), f"mode {what}")
+
+    def _mode_is(self, heartbeat: Heartbeat, main: int, sub: int) -> bool:
+        """Whether the HEARTBEAT shows mode (main, sub); PX4 packs them differently."""
+        return heartbeat.custom_mode == main
+
+    def _wait_heartbeat(self, ok: Callable[[Heartbeat], bool], what: str) -> Heartbeat:
+        def predicate(t: Telemetry) -> bool:
+            return t.heartbeat is not None and ok(t.heartbeat)
+
+        hb = self._link.wait_for(predicate, timeout_s=self._confirm_timeout_s, what=what).heartbeat
+        assert hb is not None
+        return hb
+
+    def _check_autopilot(self) -> None:
+        hb = self._wait_heartbeat(lambda hb: True, "a HEARTBEAT")
+        if self.expected_autopilots and hb.autopilot not in self.expected_autopilots:
+            entry = mavlink.enums["MAV_AUTOPILOT"].get(hb.autopilot)
+            name = entry.name if entry is not None else str(hb.autopilot)
+            raise LinkError(self._link.sysid, f"reports autopilot {name}, which the "
+                                              f"'{type(self).__name__}' profile cannot drive")
+
+    def _position(self, *, max_age_s: float = 1.0) -> LocalPosition:
+        position = self._link.telemetry.position
+        if position is None:
+            raise LinkError(self._link.sysid, "no LOCAL_POSITION_NED received yet")
+        age = self._link.clock() - position.received_at
+        if age > max_age_s:
+            raise LinkError(self._link.sysid, f"LOCAL_POSITION_NED is {age:.1f} s old")
+        return position

@@ -1,0 +1,116 @@
+"""Profile of ArduCopter in GUIDED mode, with the GCS-side vertical loop.
+
+ArduCopter takes position, velocity and acceleration targets only as whole
+three-axis groups; with acceleration only there is no altitude hold, so the
+GCS closes the vertical loop from LOCAL_POSITION_NED with
+:class:`VerticalPd` and sends ``afz`` (:data:`~gcs.link.setpoints.MASK_ACCEL`).
+``GUID_TIMEOUT`` (3 s) zeroes the targets if setpoints stop.
+
+Take-off: MAV_CMD_DO_SET_MODE GUIDED (4), arm, MAV_CMD_NAV_TAKEOFF (param7 =
+altitude above home, m). Land: MAV_CMD_DO_SET_MODE LAND (9).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from gcs.link.dialect import mavlink
+from gcs.link.link import Link
+from gcs.link.modes import CopterMode
+from gcs.link.profile import ProfileBase, ProfileName
+from gcs.link.setpoints import SetpointKind
+from gcs.typed_config import field
+
+__all__ = ["ArduPilotProfile", "VerticalPd"]
+
+
+@dataclass(frozen=True)
+class VerticalPd:
+    """PD law on altitude giving the down acceleration ArduCopter needs (gravity excluded).
+
+    ``az = kp (z_ref - z) + kd (vz_ref - vz)``, clipped to ``±az_max``. The
+    defaults give a natural frequency of 1 rad/s and damping 0.7: slow enough
+    for a 4 Hz loop, and the payload's weight is a disturbance the vehicle's
+    own controller rejects.
+    """
+
+    kp: float = field(doc="position gain, 1/s^2", default=1.0, gt=0.0)
+    kd: float = field(doc="velocity gain, 1/s", default=1.4, ge=0.0)
+    az_max: float = field(doc="largest commanded vertical acceleration, m/s^2",
+                          default=2.0, gt=0.0)
+
+    def accel_down(self, *, z_ref_ned: float, z_ned: float, vz_ned: float,
+                   vz_ref_ned: float = 0.0) -> float:
+        """Down acceleration, m/s^2, from reference and measured z (m) and vz (m/s), NED."""
+        az = self.kp * (z_ref_ned - z_ned) + self.kd * (vz_ref_ned - vz_ned)
+        if not math.isfinite(az):
+            raise ValueError(f"vertical loop input not finite: z_ref={z_ref_ned} z={z_ned} "
+                             f"vz={vz_ned}")
+        return max(-self.az_max, min(self.az_max, az))
+
+
+class ArduPilotProfile(ProfileBase):
+    """Drives ArduCopter through GUIDED; see the module docstring."""
+
+    expected_autopilots = frozenset({mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA})
+
+    def __init__(self, link: Link, *, confirm_timeout_s: float = 3.0,
+                 vertical: VerticalPd | None = None, max_position_age_s: float = 0.5) -> None:
+        super().__init__(link, confirm_timeout_s=confirm_timeout_s)
+        self.vertical = vertical if vertical is not None else VerticalPd()
+        """The vertical loop closed on the GCS."""
+        self.max_position_age_s = max_position_age_s
+        """Oldest LOCAL_POSITION_NED the vertical loop may use, s."""
+
+    @property
+    def name(self) -> ProfileName:
+        """Always :attr:`ProfileName.ARDUPILOT`."""
+        return ProfileName.ARDUPILOT
+
+    @property
+    def setpoint_kind(self) -> SetpointKind:
+        """Acceleration on all three axes."""
+        return SetpointKind.ACCEL
+
+    def mode_text(self) -> str:
+        """ArduCopter mode name such as ``GUIDED``."""
+        hb = self.link.telemetry.heartbeat
+        if hb is None:
+            return "unknown"
+        try:
+            return CopterMode(hb.custom_mode).name
+        except ValueError:
+            return f"Copter mode {hb.custom_mode}"
+
+    def takeoff(self, *, altitude_m: float) -> None:
+        """GUIDED, arm, then NAV_TAKEOFF to ``altitude_m`` above home."""
+        if not altitude_m > 0:
+            raise ValueError(f"altitude_m must be positive, got {altitude_m}")
+        self._check_autopilot()
+        self.set_mode(CopterMode.GUIDED)
+        self.arm()
+        self.link.command_long(mavlink.MAV_CMD_NAV_TAKEOFF, (0, 0, 0, 0, 0, 0, altitude_m))
+
+    def start_offboard(self, *, z_ned: float | None = None) -> None:
+        """Make sure the vehicle is in GUIDED (ArduCopter has no separate offboard mode)."""
+        hb = self.link.telemetry.heartbeat
+        if hb is None or hb.custom_mode != CopterMode.GUIDED:
+            self.set_mode(CopterMode.GUIDED)
+        if z_ned is not None:
+            self.send_setpoint(accel_xy_ned=(0.0, 0.0), z_ned=z_ned)
+
+    def send_setpoint(self, *, accel_xy_ned: tuple[float, float], z_ned: float) -> None:
+        """Acceleration on three axes; ``afz`` from :attr:`vertical` and the latest position."""
+        position = self._position(max_age_s=self.max_position_age_s)
+        az = self.vertical.accel_down(z_ref_ned=z_ned, z_ned=position.p_ned[2],
+                                      vz_ned=position.v_ned[2])
+        self.link.send_setpoint(accel_xy_ned=accel_xy_ned, az_ned=az)
+
+    def set_mode(self, mode: CopterMode) -> None:
+        """Any ArduCopter mode by MAV_CMD_DO_SET_MODE, confirmed."""
+        self._set_mode(int(mode), what=CopterMode(mode).name)
+
+    def land(self) -> None:
+        """Mode LAND."""
+        self.set_mode(CopterMode.LAND)

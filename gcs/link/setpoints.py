@@ -1,0 +1,127 @@
+"""Acceleration setpoints as ``SET_POSITION_TARGET_LOCAL_NED`` (frame LOCAL_NED).
+
+Two channel sets are used, both accepted by the autopilots' input checks:
+
+- :data:`MASK_ACCEL_XY_POS_Z`: x/y acceleration and z position. PX4 offboard
+  and the simulated vehicles (their altitude loop holds z).
+- :data:`MASK_ACCEL`: acceleration on all three axes. ArduCopter GUIDED takes
+  acceleration only as a whole group (all three axes or none), so the GCS
+  closes the vertical loop itself and sends ``afz``.
+
+Yaw and yaw rate are ignored in both: the formation does not steer heading.
+:func:`read_setpoint` is the receiving side's reading of the same message.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from enum import Enum, IntFlag
+
+from gcs.link.dialect import MavMessage, mavlink
+
+__all__ = [
+    "MASK_ACCEL",
+    "MASK_ACCEL_XY_POS_Z",
+    "AccelSetpoint",
+    "SetpointKind",
+    "TypeMask",
+    "accel_setpoint_message",
+    "read_setpoint",
+]
+
+
+class TypeMask(IntFlag):
+    """``POSITION_TARGET_TYPEMASK`` bits: a set bit means "ignore this field"."""
+
+    X_IGNORE = mavlink.POSITION_TARGET_TYPEMASK_X_IGNORE
+    Y_IGNORE = mavlink.POSITION_TARGET_TYPEMASK_Y_IGNORE
+    Z_IGNORE = mavlink.POSITION_TARGET_TYPEMASK_Z_IGNORE
+    VX_IGNORE = mavlink.POSITION_TARGET_TYPEMASK_VX_IGNORE
+    VY_IGNORE = mavlink.POSITION_TARGET_TYPEMASK_VY_IGNORE
+    VZ_IGNORE = mavlink.POSITION_TARGET_TYPEMASK_VZ_IGNORE
+    AX_IGNORE = mavlink.POSITION_TARGET_TYPEMASK_AX_IGNORE
+    AY_IGNORE = mavlink.POSITION_TARGET_TYPEMASK_AY_IGNORE
+    AZ_IGNORE = mavlink.POSITION_TARGET_TYPEMASK_AZ_IGNORE
+    FORCE_SET = mavlink.POSITION_TARGET_TYPEMASK_FORCE_SET
+    YAW_IGNORE = mavlink.POSITION_TARGET_TYPEMASK_YAW_IGNORE
+    YAW_RATE_IGNORE = mavlink.POSITION_TARGET_TYPEMASK_YAW_RATE_IGNORE
+
+
+_POS = TypeMask.X_IGNORE | TypeMask.Y_IGNORE | TypeMask.Z_IGNORE
+_VEL = TypeMask.VX_IGNORE | TypeMask.VY_IGNORE | TypeMask.VZ_IGNORE
+_YAW = TypeMask.YAW_IGNORE | TypeMask.YAW_RATE_IGNORE
+
+MASK_ACCEL = int(_POS | _VEL | _YAW)
+"""Acceleration on x, y, z only (3135)."""
+
+MASK_ACCEL_XY_POS_Z = int(TypeMask.X_IGNORE | TypeMask.Y_IGNORE | _VEL | TypeMask.AZ_IGNORE | _YAW)
+"""x/y acceleration plus z position (3387)."""
+
+
+class SetpointKind(Enum):
+    """Which channels an acceleration setpoint carries."""
+
+    ACCEL = "x/y/z acceleration"
+    ACCEL_XY_POS_Z = "x/y acceleration, z position"
+
+    @property
+    def type_mask(self) -> int:
+        """The ``type_mask`` that selects these channels."""
+        return MASK_ACCEL if self is SetpointKind.ACCEL else MASK_ACCEL_XY_POS_Z
+
+
+@dataclass(frozen=True)
+class AccelSetpoint:
+    """An acceleration setpoint as the vehicle reads it (NED, SI units)."""
+
+    kind: SetpointKind
+    accel_ned: tuple[float, float, float]
+    """Commanded acceleration, m/s^2; z is NaN for ``ACCEL_XY_POS_Z``."""
+    z_ned: float | None
+    """Commanded z position (down), m; None for ``ACCEL``."""
+    time_boot_ms: int
+    """Sender's time stamp, ms."""
+
+
+def accel_setpoint_message(mav: mavlink.MAVLink, *, target_system: int, target_component: int,
+                           time_boot_ms: int, accel_xy_ned: tuple[float, float],
+                           z_ned: float | None = None, az_ned: float | None = None) -> MavMessage:
+    """``SET_POSITION_TARGET_LOCAL_NED`` with x/y acceleration and exactly one vertical channel.
+
+    ``z_ned`` (m, down) selects :data:`MASK_ACCEL_XY_POS_Z`; ``az_ned`` (m/s^2,
+    down, gravity excluded) selects :data:`MASK_ACCEL`.
+    """
+    if (z_ned is None) == (az_ned is None):
+        raise ValueError("give exactly one vertical channel: z_ned or az_ned")
+    ax, ay = (float(a) for a in accel_xy_ned)
+    vertical = float(z_ned if z_ned is not None else az_ned)  # type: ignore[arg-type]
+    if not all(math.isfinite(v) for v in (ax, ay, vertical)):
+        raise ValueError(f"setpoint must be finite, got a=({ax}, {ay}) vertical={vertical}")
+    if z_ned is not None:
+        mask, z, az = MASK_ACCEL_XY_POS_Z, vertical, 0.0
+    else:
+        mask, z, az = MASK_ACCEL, 0.0, vertical
+    return mav.set_position_target_local_ned_encode(
+        time_boot_ms & 0xFFFFFFFF, target_system, target_component,
+        mavlink.MAV_FRAME_LOCAL_NED, mask, 0.0, 0.0, z, 0.0, 0.0, 0.0, ax, ay, az, 0.0, 0.0)
+
+
+def read_setpoint(msg: MavMessage) -> AccelSetpoint | None:
+    """The acceleration setpoint in ``msg``, or None if it is not one of the two kinds above.
+
+    Only ``SET_POSITION_TARGET_LOCAL_NED`` in ``MAV_FRAME_LOCAL_NED`` qualifies; the
+    ``FORCE_SET`` bit is ignored.
+    """
+    if msg.get_type() != "SET_POSITION_TARGET_LOCAL_NED":
+        return None
+    if msg.coordinate_frame != mavlink.MAV_FRAME_LOCAL_NED:
+        return None
+    mask = msg.type_mask & ~int(TypeMask.FORCE_SET)
+    if mask == MASK_ACCEL:
+        return AccelSetpoint(SetpointKind.ACCEL, (msg.afx, msg.afy, msg.afz), None,
+                             msg.time_boot_ms)
+    if mask == MASK_ACCEL_XY_POS_Z:
+        return AccelSetpoint(SetpointKind.ACCEL_XY_POS_Z, (msg.afx, msg.afy, math.nan), msg.z,
+                             msg.time_boot_ms)
+    return None

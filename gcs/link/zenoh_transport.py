@@ -1,0 +1,124 @@
+"""MAVLink frames over zenoh, and vehicle liveliness tokens.
+
+Each vehicle has two keys (see :mod:`gcs.link.keys`): the GCS publishes on
+``to_vehicle`` and subscribes to ``from_vehicle``; the vehicle endpoint does
+the reverse. One zenoh payload carries one encoded frame. Publications are
+``express`` (not batched) because a setpoint that waits is a stale setpoint.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import threading
+from collections.abc import Callable
+
+import zenoh
+
+from gcs.link import keys
+
+__all__ = ["ZenohTransport", "declare_alive", "watch_alive"]
+
+_log = logging.getLogger(__name__)
+
+
+class ZenohTransport:
+    """A :class:`~gcs.link.transport.Transport` over one zenoh session (shared, not owned)."""
+
+    def __init__(self, session: zenoh.Session, *, tx_key: str, rx_key: str,
+                 description: str | None = None) -> None:
+        self._session = session
+        self._tx_key = tx_key
+        self._rx_key = rx_key
+        self._description = description or f"zenoh {tx_key} / {rx_key}"
+        self._publisher: zenoh.Publisher | None = session.declare_publisher(
+            tx_key, congestion_control=zenoh.CongestionControl.DROP, express=True)
+        self._subscriber: zenoh.Subscriber | None = None
+        self._lock = threading.Lock()
+        self.callback_errors = 0
+        """Exceptions raised by the receive callback (logged, then counted)."""
+
+    @classmethod
+    def for_gcs(cls, session: zenoh.Session, *, fleet: str, sysid: int) -> ZenohTransport:
+        """The GCS end of vehicle ``sysid``'s link."""
+        return cls(session, tx_key=keys.mavlink(fleet, sysid, keys.Direction.TO_VEHICLE),
+                   rx_key=keys.mavlink(fleet, sysid, keys.Direction.FROM_VEHICLE),
+                   description=f"zenoh fleet/{fleet}/vehicle/{sysid}")
+
+    @classmethod
+    def for_vehicle(cls, session: zenoh.Session, *, fleet: str, sysid: int) -> ZenohTransport:
+        """The vehicle end of vehicle ``sysid``'s link (used by the sim)."""
+        return cls(session, tx_key=keys.mavlink(fleet, sysid, keys.Direction.FROM_VEHICLE),
+                   rx_key=keys.mavlink(fleet, sysid, keys.Direction.TO_VEHICLE),
+                   description=f"zenoh vehicle end fleet/{fleet}/vehicle/{sysid}")
+
+    @property
+    def datagram(self) -> bool:
+        """Zenoh payloads hold whole frames."""
+        return True
+
+    @property
+    def description(self) -> str:
+        """The keys this transport uses."""
+        return self._description
+
+    def start(self, on_bytes: Callable[[bytes], None]) -> None:
+        """Subscribe; ``on_bytes`` runs on zenoh's callback threads."""
+        def deliver(sample: zenoh.Sample) -> None:
+            try:
+                on_bytes(sample.payload.to_bytes())
+            except Exception:
+                self.callback_errors += 1
+                _log.exception("MAVLink receive callback failed on %s", self._rx_key)
+
+        with self._lock:
+            if self._subscriber is not None or self._publisher is None:
+                raise RuntimeError(f"{self._description}: already started or closed")
+            self._subscriber = self._session.declare_subscriber(self._rx_key, deliver)
+
+    def send(self, frame: bytes) -> None:
+        """Publish one payload; dropped silently after close."""
+        publisher = self._publisher
+        if publisher is not None:
+            try:
+                publisher.put(frame)
+            except zenoh.ZError:  # session closed underneath us: a lost frame, as on a radio
+                _log.debug("zenoh put failed on %s", self._tx_key)
+
+    def close(self) -> None:
+        """Undeclare the subscriber and publisher (the session stays open)."""
+        with self._lock:
+            sub, pub = self._subscriber, self._publisher
+            self._subscriber = self._publisher = None
+        for entity in (sub, pub):
+            if entity is not None:
+                with contextlib.suppress(zenoh.ZError):  # session closed: nothing to undeclare
+                    entity.undeclare()
+
+
+def declare_alive(session: zenoh.Session, *, fleet: str, sysid: int) -> zenoh.LivelinessToken:
+    """Declare vehicle ``sysid``'s liveliness token; gone when undeclared or the session ends.
+
+    Keep the returned token referenced for as long as the vehicle is up:
+    zenoh undeclares a token that is garbage-collected.
+    """
+    return session.liveliness().declare_token(keys.alive(fleet, sysid))
+
+
+def watch_alive(session: zenoh.Session, *, fleet: str,
+                on_change: Callable[[int, bool], None]) -> zenoh.Subscriber:
+    """Call ``on_change(sysid, alive)`` when a vehicle token of ``fleet`` appears or vanishes.
+
+    Tokens that already exist are reported at once (history). Runs on zenoh's
+    threads; undeclare the returned subscriber to stop.
+    """
+    def deliver(sample: zenoh.Sample) -> None:
+        sysid = keys.parse_alive(str(sample.key_expr))
+        if sysid is None:
+            return
+        try:
+            on_change(sysid, sample.kind == zenoh.SampleKind.PUT)
+        except Exception:
+            _log.exception("liveliness callback failed for vehicle %s", sysid)
+
+    return session.liveliness().declare_subscriber(keys.alive_all(fleet), deliver, history=True)

@@ -1,0 +1,129 @@
+"""Flight recorder: every MAVLink frame in and out, plus the GCS's own internals, as a .tlog.
+
+The file is a plain telemetry log as MAVProxy and QGroundControl write it: each
+record is an 8-byte big-endian timestamp (microseconds since the Unix epoch)
+followed by one raw MAVLink frame, so ``pymavlink.mavutil`` and
+``mavlogdump.py`` read it as they are. The GCS's internals travel as standard
+messages from the GCS's own system id:
+
+* ``DEBUG_FLOAT_ARRAY`` ``dist_err`` (array_id 1..): distance error per edge, m;
+  ``acc_cmd`` (array_id 101..): commanded NED acceleration x, y per vehicle,
+  m/s^2; arrays longer than 58 values continue in the next array_id;
+* ``NAMED_VALUE_FLOAT`` ``stk_fwd``, ``stk_rgt``, ``stk_rot``, ``scale``,
+  ``alt_tgt``: the operator command; ``NAMED_VALUE_INT`` ``phase``;
+* ``STATUSTEXT`` for phase changes and safety warnings (what replay jumps to).
+
+Timestamps follow the loop's clock (``epoch + t``), so a flight run faster than
+real time replays on its own time line. Data is flushed at least every
+``flush_interval`` seconds of wall time: a killed GCS loses at most that, and a
+truncated file still reads up to its last whole record.
+"""
+
+from __future__ import annotations
+
+import struct
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+
+from gcs.link.dialect import MavMessage, mavlink
+from gcs.link.encoder import MavlinkEncoder
+
+__all__ = ["ACC_CMD_ARRAY", "DIST_ERR_ARRAY", "TlogRecorder", "chunked"]
+
+DIST_ERR_ARRAY = 1
+ACC_CMD_ARRAY = 101
+_ARRAY_LEN = 58
+_STAMP = struct.Struct(">Q")
+
+
+def chunked(values: np.ndarray) -> list[np.ndarray]:
+    """Split a flat array into DEBUG_FLOAT_ARRAY-sized pieces (58 floats each)."""
+    flat = np.asarray(values, dtype=float).ravel()
+    return [flat[i : i + _ARRAY_LEN] for i in range(0, max(len(flat), 1), _ARRAY_LEN)]
+
+
+class TlogRecorder:
+    """Append-only .tlog writer; thread-safe (link threads and the loop write).
+
+    Args:
+        path: the file to create (parent folders are made).
+        encoder: the GCS's own encoder, for the internals it records.
+        epoch: Unix time of the clock's zero, s.
+        flush_interval: longest wall time between flushes, s.
+    """
+
+    def __init__(self, path: str | Path, *, encoder: MavlinkEncoder, epoch: float,
+                 flush_interval: float = 0.5) -> None:
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._file = self.path.open("wb")
+        self._enc = encoder
+        self._epoch = epoch
+        self._flush_interval = flush_interval
+        self._last_flush = time.monotonic()
+        self._lock = threading.Lock()
+        self._boot = 0.0
+        self.records = 0
+        self.errors = 0
+        """Write failures (disk full...): counted, never raised into the loop."""
+
+    def frame(self, t: float, frame: bytes) -> None:
+        """Record one raw MAVLink frame seen (in or out) at loop time ``t``."""
+        with self._lock:
+            if self._file.closed:
+                return
+            try:
+                self._file.write(_STAMP.pack(round((self._epoch + t) * 1e6)) + frame)
+                self.records += 1
+                now = time.monotonic()
+                if now - self._last_flush >= self._flush_interval:
+                    self._file.flush()
+                    self._last_flush = now
+            except OSError:
+                self.errors += 1
+
+    def message(self, t: float, msg: MavMessage) -> None:
+        """Encode one of the GCS's own messages and record it."""
+        self.frame(t, self._enc.encode(msg))
+
+    def internals(self, t: float, *, distance_errors: np.ndarray, accel_cmd: np.ndarray,
+                  sticks: tuple[float, float, float], scale: float, altitude: float,
+                  phase: int) -> None:
+        """Record one tick of guidance internals."""
+        mav = self._enc.mav
+        usec = round(t * 1e6)
+        ms = round(t * 1e3) & 0xFFFFFFFF
+        for base, name, values in ((DIST_ERR_ARRAY, b"dist_err", distance_errors),
+                                   (ACC_CMD_ARRAY, b"acc_cmd", accel_cmd)):
+            for k, part in enumerate(chunked(values)):
+                data = np.zeros(_ARRAY_LEN)
+                data[: len(part)] = part
+                self.message(t, mav.debug_float_array_encode(usec, name, base + k,
+                                                             data.tolist()))
+        for name, value in ((b"stk_fwd", sticks[0]), (b"stk_rgt", sticks[1]),
+                            (b"stk_rot", sticks[2]), (b"scale", scale),
+                            (b"alt_tgt", altitude)):
+            self.message(t, mav.named_value_float_encode(ms, name, float(value)))
+        self.message(t, mav.named_value_int_encode(ms, b"phase", int(phase)))
+
+    def text(self, t: float, text: str, *, severity: int = mavlink.MAV_SEVERITY_INFO) -> None:
+        """Record a STATUSTEXT (phase changes, warnings); long texts are cut at 50 bytes."""
+        raw = text.encode("utf-8", "replace")[:50]
+        self.message(t, self._enc.mav.statustext_encode(severity, raw))
+
+    def flush(self) -> None:
+        """Push everything written so far to the operating system."""
+        with self._lock:
+            if not self._file.closed:
+                self._file.flush()
+                self._last_flush = time.monotonic()
+
+    def close(self) -> None:
+        """Flush and close; later writes are ignored."""
+        with self._lock:
+            if not self._file.closed:
+                self._file.flush()
+                self._file.close()

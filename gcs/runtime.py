@@ -1,0 +1,384 @@
+"""The GCS loop: operator sticks in, one acceleration setpoint per vehicle out, at 4 Hz.
+
+Each tick (scheduled on a :class:`~gcs.clock.Clock`, wall or simulator time):
+
+1. read the fleet's latest telemetry (:func:`gcs.fleet.read_fleet`);
+2. apply the safety rules (:func:`gcs.safety.evaluate`): freeze the motion or
+   land the team;
+3. take the operator's command, run the guidance (relative positions, own
+   velocities), saturate, and send each vehicle its setpoint through its
+   autopilot profile; an error about one vehicle is reported and the loop
+   goes on;
+4. advance the flight phase and record the guidance internals.
+
+Phase actions that wait for acknowledgements (arm, take off, land) run on a
+worker thread, so the loop never waits on a vehicle. The latest
+:class:`RuntimeSnapshot` is what the UI and the flight metrics read.
+"""
+
+from __future__ import annotations
+
+import collections
+import math
+import threading
+import time
+from collections.abc import Callable, Mapping
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from gcs.analysis import Analysis, analyze
+from gcs.clock import Clock, ClockStoppedError
+from gcs.config import Team
+from gcs.fleet import FleetState, read_fleet
+from gcs.guidance import Guidance, MotionDemand
+from gcs.link.profile import AutopilotProfile
+from gcs.operator import OperatorCommand, OperatorSnapshot
+from gcs.phases import Action, Phase, PhaseError, next_phase
+from gcs.recorder import TlogRecorder
+from gcs.safety import SafetyVerdict, evaluate
+
+__all__ = ["Event", "Runtime", "RuntimeSnapshot", "TickStats"]
+
+
+@dataclass(frozen=True)
+class Event:
+    """Something the operator should see: a phase change, a warning, an error."""
+
+    t: float
+    level: str  # "info", "warning", "error"
+    text: str
+
+
+@dataclass(frozen=True)
+class TickStats:
+    """Timing of the loop over the recent ticks, s."""
+
+    ticks: int
+    compute_last: float
+    compute_p99: float
+    jitter_p99: float
+    overruns: int
+
+
+@dataclass(frozen=True, eq=False)
+class RuntimeSnapshot:
+    """The state of one tick, for the UI and the metrics (immutable; latest wins)."""
+
+    fleet: FleetState
+    phase: Phase
+    operator: OperatorSnapshot
+    demand: MotionDemand  # what the guidance used (frozen motion: zero sticks)
+    accel_cmd: np.ndarray  # (n, 2) NED m/s^2 sent this tick (zeros when not streaming)
+    distance_errors: np.ndarray  # (m,) m, NaN while unknown
+    safety: SafetyVerdict
+    stats: TickStats
+    events: tuple[Event, ...] = field(default=())
+
+
+class Runtime:
+    """The formation loop of one team.
+
+    Args:
+        team: the loaded team.
+        profiles: autopilot profile per vehicle system id (from the LinkManager).
+        clock: where time comes from.
+        operator: the operator command the sources write to.
+        recorder: optional flight recorder.
+    """
+
+    def __init__(self, team: Team, profiles: Mapping[int, AutopilotProfile], clock: Clock,
+                 operator: OperatorCommand, *, recorder: TlogRecorder | None = None) -> None:
+        self.team = team
+        self.ids = team.formation.ids
+        missing = [vid for vid in self.ids if vid not in profiles]
+        if missing:
+            raise ValueError(f"no link configured for vehicle(s) {missing}")
+        self.profiles = profiles
+        self.clock = clock
+        self.operator = operator
+        self.recorder = recorder
+        self.guidance = Guidance.from_team(team)
+        self.analysis: Analysis = analyze(team)
+        self.safe_radius = 0.5 * self.analysis.safe_span
+        self.period = 1.0 / team.config.guidance.rate_hz
+        self._phase = Phase.CONNECT
+        self._lock = threading.Lock()
+        self._events: collections.deque[Event] = collections.deque(maxlen=200)
+        self._active_warnings: set[tuple[str, int]] = set()
+        self._pool = ThreadPoolExecutor(max_workers=max(2, len(self.ids)),
+                                        thread_name_prefix="gcs-action")
+        self._action_busy = threading.Lock()
+        self._abort_at: float | None = None
+        self._compute: collections.deque[float] = collections.deque(maxlen=400)
+        self._jitter: collections.deque[float] = collections.deque(maxlen=400)
+        self._overruns = 0
+        self._ticks = 0
+        self._snapshot: RuntimeSnapshot | None = None
+        self._listeners: list[Callable[[RuntimeSnapshot], None]] = []
+        if recorder is not None:
+            for vid in self.ids:
+                profiles[vid].link.add_frame_listener(
+                    lambda _direction, frame: recorder.frame(self.clock.now(), frame))
+
+    # -- state ---------------------------------------------------------------------------
+
+    @property
+    def phase(self) -> Phase:
+        with self._lock:
+            return self._phase
+
+    @property
+    def snapshot(self) -> RuntimeSnapshot | None:
+        """The latest tick's snapshot (None before the first tick)."""
+        return self._snapshot
+
+    def events(self) -> tuple[Event, ...]:
+        """Recent events, oldest first."""
+        with self._lock:
+            return tuple(self._events)
+
+    def add_listener(self, callback: Callable[[RuntimeSnapshot], None]) -> None:
+        """Call ``callback(snapshot)`` after every tick (on the loop thread: keep it short)."""
+        self._listeners.append(callback)
+
+    def taut_altitude(self, scale: float) -> float:
+        """Vehicle altitude at which the ropes become taut with the payload on the ground, m."""
+        cfg = self.team.config
+        r = scale * float(self.team.formation.radii.max())
+        return math.sqrt(max(cfg.payload.rope_length**2 - r**2, 0.0))
+
+    def _event(self, level: str, text: str) -> None:
+        t = self.clock.now()
+        with self._lock:
+            self._events.append(Event(t, level, text))
+        if self.recorder is not None:
+            severity = {"info": 6, "warning": 4, "error": 3}[level]
+            self.recorder.text(t, text, severity=severity)
+
+    def _set_phase(self, phase: Phase) -> None:
+        with self._lock:
+            if phase is self._phase:
+                return
+            self._phase = phase
+        self._event("info", f"phase: {phase.text}")
+
+    # -- operator actions ----------------------------------------------------------------
+
+    def request(self, action: Action) -> None:
+        """Start a phase action; returns at once. PhaseError if the phase does not allow it."""
+        with self._lock:
+            target = next_phase(self._phase, action)
+        if action is Action.ABORT:
+            self.operator.release(now=self.clock.now(), source="abort")
+            self._abort_at = self.clock.now()
+            self._set_phase(target)
+            return
+        if action in (Action.LIFT, Action.SET_DOWN):
+            self._set_phase(target)
+            scale = self.operator.snapshot(self.clock.now()).demand.scale
+            base = self.taut_altitude(scale)
+            height = base + (self.team.config.flight.lift_height if action is Action.LIFT
+                             else -self.team.config.flight.takeoff_slack)
+            self.operator.set_altitude(height, now=self.clock.now())
+            return
+        if not self._action_busy.acquire(blocking=False):
+            raise PhaseError(f"cannot {action.value}: another action is still running")
+        self._pool.submit(self._run_action, action, target)
+
+    def _run_action(self, action: Action, target: Phase) -> None:
+        try:
+            if action is Action.ARM:
+                self._for_all("arm", lambda p: p.arm())
+                self._set_phase(target)
+            elif action is Action.DISARM:
+                self._for_all("disarm", lambda p: p.disarm())
+                self._set_phase(target)
+            elif action is Action.TAKEOFF:
+                self._takeoff()
+            elif action is Action.LAND:
+                self._set_phase(target)
+                self._for_all("land", lambda p: p.land())
+        except Exception as exc:  # report, never kill the worker
+            self._event("error", f"{action.value} failed: {exc}")
+            if action is Action.ARM:
+                self._for_all("disarm", lambda p: p.disarm(), quiet=True)
+                self._set_phase(Phase.READY)
+        finally:
+            self._action_busy.release()
+
+    def _for_all(self, what: str, fn: Callable[[AutopilotProfile], None], *,
+                 quiet: bool = False) -> None:
+        """Run ``fn`` on every vehicle in parallel; raise one error naming every failure."""
+        futures = {vid: self._pool.submit(fn, self.profiles[vid]) for vid in self.ids}
+        failures = []
+        for vid, fut in futures.items():
+            try:
+                fut.result()
+            except Exception as exc:
+                failures.append(f"vehicle {vid}: {exc}")
+        if failures and not quiet:
+            raise RuntimeError(f"{what}: " + "; ".join(failures))
+
+    def _takeoff(self) -> None:
+        cfg = self.team.config.flight
+        self._set_phase(Phase.TAKING_OFF)
+        scale = self.operator.snapshot(self.clock.now()).demand.scale
+        h0 = self.taut_altitude(scale) - cfg.takeoff_slack
+        self._for_all("take off", lambda p: p.takeoff(altitude_m=h0))
+        deadline = time.monotonic() + cfg.takeoff_timeout
+        while True:
+            fleet = read_fleet(self.ids, self.profiles, self.clock.now())
+            alt = -fleet.p_ned[:, 2]
+            if np.all(np.abs(alt - h0) < cfg.altitude_tolerance):
+                break
+            if self.phase is not Phase.TAKING_OFF:
+                return  # aborted meanwhile
+            if time.monotonic() > deadline:
+                low = [vid for vid, a in zip(self.ids, alt, strict=True)
+                       if not abs(a - h0) < cfg.altitude_tolerance]
+                raise RuntimeError(f"vehicles {low} did not reach {h0:.2f} m in "
+                                   f"{cfg.takeoff_timeout:g} s")
+            time.sleep(0.02)
+        self.operator.reset_altitude(h0, now=self.clock.now())
+        self._for_all("offboard", lambda p: p.start_offboard(z_ned=-h0))
+        if self.phase is Phase.TAKING_OFF:
+            self._set_phase(Phase.HOVER)
+
+    # -- the loop ------------------------------------------------------------------------
+
+    def tick(self) -> RuntimeSnapshot:
+        """One guidance tick; never raises for a vehicle's fault."""
+        started = time.perf_counter()
+        now = self.clock.now()
+        fleet = read_fleet(self.ids, self.profiles, now)
+        verdict = evaluate(self.team.config.safety, self.ids, fleet.age, fleet.p_ned,
+                           safe_radius=self.safe_radius)
+        self._report_safety(verdict)
+        op = self.operator.snapshot(now)
+        phase = self.phase
+        if phase is Phase.CONNECT:
+            self._preflight(fleet)
+        elif phase is Phase.LANDING and np.all(np.isfinite(fleet.heartbeat_age)) \
+                and not fleet.armed.any():
+            self._set_phase(Phase.LANDED)
+        if verdict.land and phase.airborne and phase not in (Phase.ABORTING, Phase.LANDING):
+            self.request(Action.ABORT)
+            phase = self.phase
+        moving = phase is Phase.FORMATION and not verdict.freeze and op.guidance_on
+        demand = op.demand if moving else MotionDemand(scale=op.demand.scale)
+        accel = np.zeros((fleet.n, 2))
+        if phase.streaming:
+            accel = self._stream(fleet, demand, op)
+            self._advance(phase, op, now)
+        errors = self.team.formation.distance_errors(fleet.p_ned[:, :2], demand.scale)
+        if self.recorder is not None:
+            self.recorder.internals(now, distance_errors=np.nan_to_num(errors, nan=0.0),
+                                    accel_cmd=accel,
+                                    sticks=(demand.forward, demand.right, demand.rotate),
+                                    scale=demand.scale, altitude=op.altitude, phase=int(phase))
+        self._compute.append(time.perf_counter() - started)
+        self._ticks += 1
+        snap = RuntimeSnapshot(fleet=fleet, phase=self.phase, operator=op, demand=demand,
+                               accel_cmd=accel, distance_errors=errors, safety=verdict,
+                               stats=self.stats(), events=self.events()[-20:])
+        self._snapshot = snap
+        for listener in self._listeners:
+            try:
+                listener(snap)
+            except Exception as exc:
+                self._event("error", f"listener failed: {exc}")
+        return snap
+
+    def _preflight(self, fleet: FleetState) -> None:
+        fresh = np.isfinite(fleet.age) & (fleet.age < self.team.config.safety.stale_after)
+        if fresh.all() and np.all(np.isfinite(fleet.heartbeat_age)):
+            if not self.analysis.ok:
+                self._warn_once(("analysis", 0), "pre-flight: gcs analyze fails: " +
+                                self.analysis.violations[0].message)
+                return
+            self._set_phase(Phase.READY)
+
+    def _stream(self, fleet: FleetState, demand: MotionDemand,
+                op: OperatorSnapshot) -> np.ndarray:
+        """Guidance and one setpoint per vehicle; errors are per vehicle."""
+        p, v = fleet.p_ned[:, :2], fleet.v_ned[:, :2]
+        known = np.all(np.isfinite(p), axis=1) & np.all(np.isfinite(v), axis=1)
+        if known.all():
+            accel = self.guidance.accelerations(p, v, fleet.yaw, demand)
+        else:  # cannot place every vehicle: hold still horizontally
+            accel = np.zeros((fleet.n, 2))
+        accel = np.nan_to_num(accel, nan=0.0, posinf=0.0, neginf=0.0)
+        z = -op.altitude
+        for i, vid in enumerate(self.ids):
+            try:
+                self.profiles[vid].send_setpoint(accel_xy_ned=(float(accel[i, 0]),
+                                                               float(accel[i, 1])), z_ned=z)
+            except Exception as exc:
+                self._warn_once(("send", vid), f"vehicle {vid}: setpoint not sent: {exc}")
+        return accel
+
+    def _advance(self, phase: Phase, op: OperatorSnapshot, now: float) -> None:
+        reached = abs(op.altitude - op.altitude_target) < 1e-6
+        if phase is Phase.LIFTING and reached:
+            self._set_phase(Phase.FORMATION)
+        elif phase is Phase.SETTING_DOWN and reached:
+            self._set_phase(Phase.HOVER)
+        elif (phase is Phase.ABORTING and self._abort_at is not None
+              and now - self._abort_at >= self.team.config.flight.abort_hold):
+            self._abort_at = None
+            self._set_phase(Phase.LANDING)
+            if self._action_busy.acquire(blocking=False):
+                self._pool.submit(self._run_action, Action.LAND, Phase.LANDING)
+            else:  # an action is stuck: land directly
+                self._pool.submit(self._for_all, "land", lambda p: p.land(), quiet=True)
+
+    def _report_safety(self, verdict: SafetyVerdict) -> None:
+        active = set()
+        for e in verdict.events:
+            key = (e.reason.name, e.vehicle)
+            active.add(key)
+            if key not in self._active_warnings:
+                self._event("warning", e.text)
+        self._active_warnings = {k for k in self._active_warnings if k[0] in ("send", "analysis")}
+        self._active_warnings |= active
+
+    def _warn_once(self, key: tuple[str, int], text: str) -> None:
+        if key not in self._active_warnings:
+            self._active_warnings.add(key)
+            self._event("warning", text)
+
+    def stats(self) -> TickStats:
+        """Loop timing over the recent ticks."""
+        comp = np.array(self._compute) if self._compute else np.zeros(1)
+        jit = np.array(self._jitter) if self._jitter else np.zeros(1)
+        return TickStats(ticks=self._ticks, compute_last=float(comp[-1]),
+                         compute_p99=float(np.percentile(comp, 99)),
+                         jitter_p99=float(np.percentile(jit, 99)), overruns=self._overruns)
+
+    def run(self, stop: threading.Event) -> None:
+        """Tick at the guidance rate on the clock until ``stop`` is set (or the clock dies)."""
+        k = 0
+        start = self.clock.now()
+        while not stop.is_set():
+            due = start + k * self.period
+            try:
+                self.clock.sleep_until(due)
+            except ClockStoppedError as exc:
+                self._event("error", f"loop stopped: {exc}")
+                return
+            late = self.clock.now() - due
+            self._jitter.append(late)
+            if late > self.period:
+                self._overruns += 1
+                k = int((self.clock.now() - start) / self.period)  # skip, do not burst
+            try:
+                self.tick()
+            except Exception as exc:  # a bug must not stop the team's setpoint stream silently
+                self._event("error", f"tick failed: {type(exc).__name__}: {exc}")
+            k += 1
+
+    def close(self) -> None:
+        """Stop the worker threads (does not land: that is the operator's or abort's job)."""
+        self._pool.shutdown(wait=False, cancel_futures=True)

@@ -1,0 +1,227 @@
+"""MAVLink 2 codec: real frames, noise, truncation, corruption; both GCS and vehicle sides."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import pytest
+from pymavlink.dialects.v20 import ardupilotmega as v20
+
+from gcs.link import (
+    DEFAULT_GCS_SYSTEM_ID,
+    MASK_ACCEL,
+    MASK_ACCEL_XY_POS_Z,
+    FrameDecoder,
+    MavlinkEncoder,
+    SetpointKind,
+    accel_setpoint_message,
+    read_setpoint,
+)
+
+
+def gcs_encoder() -> MavlinkEncoder:
+    return MavlinkEncoder(system_id=DEFAULT_GCS_SYSTEM_ID, component_id=190)
+
+
+def heartbeat(encoder: MavlinkEncoder, custom_mode: int = 0) -> bytes:
+    return encoder.encode(encoder.mav.heartbeat_encode(
+        v20.MAV_TYPE_QUADROTOR, v20.MAV_AUTOPILOT_GENERIC, 0, custom_mode, 0))
+
+
+def test_frames_are_mavlink2_with_own_ids_and_wrapping_sequence() -> None:
+    gcs = gcs_encoder()
+    frames = [heartbeat(gcs) for _ in range(300)]
+    assert DEFAULT_GCS_SYSTEM_ID == 245
+    assert all(f[0] == 0xFD for f in frames)
+    assert {(f[5], f[6]) for f in frames} == {(245, 190)}
+    assert [f[4] for f in frames[:3]] == [0, 1, 2]
+    assert frames[256][4] == 0 and frames[299][4] == 43
+    assert gcs.frames_sent == 300
+
+
+def test_vehicle_side_encoder_round_trip_through_gcs_decoder() -> None:
+    vehicle = MavlinkEncoder(system_id=3, component_id=1)
+    decoder = FrameDecoder(datagram=True)
+    msgs = [
+        vehicle.mav.local_position_ned_encode(1500, 1.0, -2.0, -3.5, 0.1, 0.2, -0.3),
+        vehicle.mav.attitude_quaternion_encode(1500, 1.0, 0.0, 0.0, 0.0, 0.1, 0.2, 0.3),
+        vehicle.mav.statustext_encode(4, b"rope taut"),
+        vehicle.mav.command_ack_encode(400, 0, 0, 0, 245, 190),
+    ]
+    out = decoder.feed(b"".join(vehicle.encode(m) for m in msgs))
+    assert [m.get_type() for m in out] == ["LOCAL_POSITION_NED", "ATTITUDE_QUATERNION",
+                                           "STATUSTEXT", "COMMAND_ACK"]
+    assert all((m.get_srcSystem(), m.get_srcComponent()) == (3, 1) for m in out)
+    assert (out[0].x, out[0].z, out[0].vz) == pytest.approx((1.0, -3.5, -0.3))
+    assert out[2].text == "rope taut"
+    assert (out[3].command, out[3].target_system) == (400, 245)
+    assert decoder.stats().frames == 4 and decoder.stats().dropped == 0
+
+
+def test_identity_is_validated() -> None:
+    with pytest.raises(ValueError, match="system id"):
+        MavlinkEncoder(system_id=0, component_id=1)
+    with pytest.raises(ValueError, match="component id"):
+        MavlinkEncoder(system_id=1, component_id=256)
+
+
+def test_random_bytes_are_counted_and_frames_inside_noise_survive() -> None:
+    rng = np.random.default_rng(20190520)
+    vehicle = MavlinkEncoder(system_id=1, component_id=1)
+    for datagram in (True, False):
+        decoder = FrameDecoder(datagram=datagram)
+        got = 0
+        sent = 0
+        total = 0
+        for _ in range(60):
+            noise = rng.integers(0, 256, int(rng.integers(1, 400)), dtype=np.uint8).tobytes()
+            frame = heartbeat(vehicle, custom_mode=7)
+            sent += 1
+            data = noise + frame
+            total += len(data)
+            if datagram:
+                got += len(decoder.feed(data))
+            else:  # a stream cut into arbitrary chunks
+                cuts = sorted(rng.integers(0, len(data), 4).tolist())
+                for a, b in zip([0, *cuts], [*cuts, len(data)], strict=True):
+                    got += len(decoder.feed(data[a:b]))
+        stats = decoder.stats()
+        assert got == sent, f"datagram={datagram}"
+        assert stats.garbage_bytes > 1000
+        assert stats.frames == sent
+        assert stats.bytes_received == total
+
+
+def test_pure_noise_never_raises() -> None:
+    rng = np.random.default_rng(7)
+    decoder = FrameDecoder(datagram=False)
+    magic_heavy = np.array([0xFD, 0xFE, 0x00, 0x01, 0xFF], dtype=np.uint8)
+    for i in range(300):
+        if i % 2:
+            chunk = rng.integers(0, 256, 97, dtype=np.uint8).tobytes()
+        else:
+            chunk = rng.choice(magic_heavy, 97).tobytes()
+        decoder.feed(chunk)
+    decoder.flush()
+    stats = decoder.stats()
+    assert stats.frames == 0
+    assert stats.garbage_bytes + stats.bad_crc + stats.truncated + stats.unknown_message > 0
+
+
+def test_truncated_frames_are_counted() -> None:
+    vehicle = MavlinkEncoder(system_id=1, component_id=1)
+    frame = vehicle.encode(vehicle.mav.local_position_ned_encode(1, 1, 2, 3, 4, 5, 6))
+    datagram = FrameDecoder(datagram=True)
+    assert datagram.feed(frame[:-5]) == []
+    assert datagram.stats().truncated >= 1
+    assert len(datagram.feed(frame)) == 1  # the next datagram is unaffected
+
+    stream = FrameDecoder(datagram=False)
+    assert stream.feed(frame[:-5]) == []  # waits for the rest
+    assert stream.stats().truncated == 0
+    stream.flush()
+    assert stream.stats().truncated >= 1
+    assert len(stream.feed(frame)) == 1
+
+
+def test_truncated_frame_in_a_stream_does_not_hold_back_the_next() -> None:
+    vehicle = MavlinkEncoder(system_id=1, component_id=1)
+    first = vehicle.encode(vehicle.mav.local_position_ned_encode(1, 1, 2, 3, 4, 5, 6))
+    second = heartbeat(vehicle)
+    for cut in range(1, len(first) - 1):
+        stream = FrameDecoder(datagram=False)
+        out = stream.feed(first[:cut] + second)
+        assert [m.get_type() for m in out] == ["HEARTBEAT"], cut
+        # Cut short inside the bytes that follow: a truncation if the declared
+        # length runs past the data, otherwise indistinguishable from a bad CRC.
+        stats = stream.stats()
+        assert stats.truncated + stats.bad_crc == 1, cut
+
+
+def test_corrupted_byte_fails_crc_and_neighbours_survive() -> None:
+    vehicle = MavlinkEncoder(system_id=1, component_id=1)
+    frames = [vehicle.encode(vehicle.mav.local_position_ned_encode(i, i, 0, 0, 0, 0, 0))
+              for i in range(3)]
+    bad = bytearray(frames[1])
+    bad[12] ^= 0x40
+    decoder = FrameDecoder(datagram=True)
+    out = decoder.feed(frames[0] + bytes(bad) + frames[2])
+    assert [m.time_boot_ms for m in out] == [0, 2]
+    assert decoder.stats().bad_crc >= 1
+
+
+def test_unknown_message_id_is_counted_and_skipped() -> None:
+    vehicle = MavlinkEncoder(system_id=1, component_id=1)
+    good = heartbeat(vehicle)
+    unknown = bytearray(good)
+    unknown[7:10] = (0xEE, 0xEE, 0x0E)  # message id 0x0EEEEE: not in the dialect
+    decoder = FrameDecoder(datagram=True)
+    out = decoder.feed(bytes(unknown) + good)
+    assert len(out) == 1
+    assert decoder.stats().unknown_message == 1
+
+
+def test_mavlink1_frames_are_read_on_unsigned_links() -> None:
+    mav1 = v20.MAVLink(None, 1, 1)
+    frame = mav1.heartbeat_encode(2, 3, 0, 4, 0).pack(mav1, force_mavlink1=True)
+    assert frame[0] == 0xFE
+    out = FrameDecoder(datagram=True).feed(frame)
+    assert [(m.get_type(), m.custom_mode) for m in out] == [("HEARTBEAT", 4)]
+
+
+def test_setpoint_messages_round_trip_for_both_kinds() -> None:
+    gcs = gcs_encoder()
+    decoder = FrameDecoder(datagram=True)
+    xy_z = accel_setpoint_message(gcs.mav, target_system=2, target_component=1,
+                                  time_boot_ms=1234, accel_xy_ned=(0.5, -0.25), z_ned=-1.2)
+    acc = accel_setpoint_message(gcs.mav, target_system=2, target_component=1,
+                                 time_boot_ms=1250, accel_xy_ned=(0.5, -0.25), az_ned=-0.4)
+    a, b = decoder.feed(gcs.encode(xy_z) + gcs.encode(acc))
+    first, second = read_setpoint(a), read_setpoint(b)
+    assert first is not None and second is not None
+    assert (a.type_mask, b.type_mask) == (MASK_ACCEL_XY_POS_Z, MASK_ACCEL) == (3387, 3135)
+    assert first.kind is SetpointKind.ACCEL_XY_POS_Z and first.z_ned == pytest.approx(-1.2)
+    assert first.accel_ned[:2] == pytest.approx((0.5, -0.25)) and math.isnan(first.accel_ned[2])
+    assert second.kind is SetpointKind.ACCEL and second.z_ned is None
+    assert second.accel_ned == pytest.approx((0.5, -0.25, -0.4))
+    assert (a.target_system, a.coordinate_frame) == (2, v20.MAV_FRAME_LOCAL_NED)
+
+
+def test_setpoint_needs_exactly_one_finite_vertical_channel() -> None:
+    mav = gcs_encoder().mav
+    common = {"target_system": 2, "target_component": 1, "time_boot_ms": 0}
+    with pytest.raises(ValueError, match="exactly one"):
+        accel_setpoint_message(mav, accel_xy_ned=(0, 0), **common)
+    with pytest.raises(ValueError, match="exactly one"):
+        accel_setpoint_message(mav, accel_xy_ned=(0, 0), z_ned=-1, az_ned=0, **common)
+    with pytest.raises(ValueError, match="finite"):
+        accel_setpoint_message(mav, accel_xy_ned=(math.nan, 0), z_ned=-1, **common)
+
+
+def test_other_position_targets_are_not_acceleration_setpoints() -> None:
+    mav = gcs_encoder().mav
+    position = mav.set_position_target_local_ned_encode(0, 2, 1, v20.MAV_FRAME_LOCAL_NED, 0xDF8,
+                                                        1, 2, 3, 0, 0, 0, 0, 0, 0, 0, 0)
+    body = mav.set_position_target_local_ned_encode(0, 2, 1, v20.MAV_FRAME_BODY_NED, MASK_ACCEL,
+                                                    0, 0, 0, 0, 0, 0, 1, 1, 1, 0, 0)
+    assert read_setpoint(position) is None and read_setpoint(body) is None
+    assert read_setpoint(mav.heartbeat_encode(0, 0, 0, 0, 0)) is None
+
+
+def test_encode_and_decode_are_fast_enough_for_a_fleet() -> None:
+    gcs = gcs_encoder()
+    decoder = FrameDecoder(datagram=True)
+    n = 2000
+    msg = accel_setpoint_message(gcs.mav, target_system=2, target_component=1, time_boot_ms=0,
+                                 accel_xy_ned=(0.1, 0.2), z_ned=-1.0)
+    t0 = time.perf_counter()
+    frames = [gcs.encode(msg) for _ in range(n)]
+    t1 = time.perf_counter()
+    decoded = sum(len(decoder.feed(f)) for f in frames)
+    t2 = time.perf_counter()
+    assert decoded == n
+    # pymavlink alone: about 17 us to encode and 52 us to decode here; allow for a loaded machine.
+    assert (t1 - t0) / n < 300e-6
+    assert (t2 - t1) / n < 600e-6
