@@ -25,6 +25,45 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     return 0 if result.ok else 1
 
 
+def _cmd_sim(args: argparse.Namespace) -> int:
+    # The simulator is its own program (python -m sim); the GCS never imports it.
+    import os
+
+    argv = [sys.executable, "-m", "sim", "--config", args.config, *args.sim_args]
+    os.execv(sys.executable, argv)
+    return 0  # not reached
+
+
+def _cmd_fly(args: argparse.Namespace) -> int:
+    import json
+    from pathlib import Path
+
+    from gcs.config import load_team
+    from gcs.fly import fly
+    from gcs.scenario import load_scenario
+
+    team = load_team(args.config)
+    scenario = load_scenario(args.scenario)
+    if args.speed != "max":
+        try:
+            if float(args.speed) <= 0:
+                raise ValueError
+        except ValueError:
+            raise ConfigError("--speed", "", f"must be a positive number or 'max', "
+                              f"got {args.speed!r}") from None
+    result = fly(team, scenario, speed=args.speed,
+                 record=Path(args.record) if args.record else None, connect=args.connect,
+                 progress=not args.quiet)
+    data = result.to_json()
+    if args.json:
+        print(json.dumps(data))
+    else:
+        width = max(len(k) for k in data)
+        for key, value in data.items():
+            print(f"{key:<{width}}  {value}")
+    return 0 if result.error is None else 1
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand."""
     parser = argparse.ArgumentParser(
@@ -41,6 +80,33 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("config", help="team config (YAML), e.g. configs/bebop_square.yaml")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=_cmd_analyze)
+
+    p = sub.add_parser("sim", help="host a simulated team behind zenoh (and UDP)",
+                       description="Runs `python -m sim`: the whole simulated team with its "
+                                   "INDI autopilots; every vehicle is a MAVLink 2 peer on "
+                                   "zenoh (and on UDP with --udp). Options after CONFIG go "
+                                   "to the simulator (see `python -m sim --help`).")
+    p.add_argument("--config", required=True, help="team config (YAML)")
+    p.add_argument("sim_args", nargs=argparse.REMAINDER,
+                   help="simulator options, e.g. --speed 2 --udp")
+    p.set_defaults(func=_cmd_sim)
+
+    p = sub.add_parser("fly", help="fly a scenario headless with simulated vehicles",
+                       description="Starts the simulated team (or joins a running `gcs sim` "
+                                   "with --connect), plays the scenario's operator inputs "
+                                   "and prints the flight metrics. Exit 1 if the flight "
+                                   "did not complete.")
+    p.add_argument("--config", required=True, help="team config (YAML)")
+    p.add_argument("--scenario", required=True, help="scenario (YAML), e.g. "
+                   "configs/scenarios/paper_flight.yaml")
+    p.add_argument("--speed", default="max",
+                   help="sim seconds per wall second, or 'max' (default)")
+    p.add_argument("--record", metavar="FILE", help="record the flight to a .tlog")
+    p.add_argument("--connect", metavar="ENDPOINT",
+                   help="join a running `gcs sim` at this zenoh endpoint instead")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    p.set_defaults(func=_cmd_fly)
     return parser
 
 

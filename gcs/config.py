@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from gcs.formation import Formation, FormationError, build_formation
+from gcs.link.config import GcsLinkConfig, LinkConfig, check_links
 from gcs.typed_config import ConfigError, field, from_mapping, load_yaml
 from vehicles.airframe import Airframe, load_airframe
 
@@ -26,6 +27,7 @@ __all__ = [
     "AnalysisConfig",
     "ConfigError",
     "EdgeSpec",
+    "FlightConfig",
     "GuidanceConfig",
     "LimitsConfig",
     "OperatorConfig",
@@ -163,6 +165,22 @@ class SafetyConfig:
 
 
 @dataclass(frozen=True)
+class FlightConfig:
+    """Heights and timings of the flight phases (gcs/phases.py)."""
+
+    takeoff_slack: float = field(doc="take off to this far below the altitude where the ropes "
+                                 "become taut, m", default=0.15, ge=0.0)
+    lift_height: float = field(doc="climb above the taut-rope altitude to lift the payload, m",
+                               default=1.0, gt=0.0)
+    altitude_tolerance: float = field(doc="an altitude counts as reached within this, m",
+                                      default=0.1, gt=0.0)
+    takeoff_timeout: float = field(doc="longest take-off before it is declared failed, s",
+                                   default=30.0, gt=0.0)
+    abort_hold: float = field(doc="after an abort, hold this long before landing, s",
+                              default=1.0, ge=0.0)
+
+
+@dataclass(frozen=True)
 class TeamConfig:
     """Everything that defines one team; see configs/bebop_square.yaml."""
 
@@ -178,6 +196,18 @@ class TeamConfig:
     operator: OperatorConfig = field(doc="operator input shaping",
                                      default_factory=OperatorConfig)
     safety: SafetyConfig = field(doc="safety rules", default_factory=SafetyConfig)
+    flight: FlightConfig = field(doc="flight phases", default_factory=FlightConfig)
+    gcs: GcsLinkConfig = field(doc="the GCS's identity and zenoh settings",
+                               default_factory=GcsLinkConfig)
+    links: tuple[LinkConfig, ...] | None = field(
+        doc="how to reach each vehicle (default: every vehicle simulated, over zenoh)",
+        default=None)
+
+    def vehicle_links(self) -> tuple[LinkConfig, ...]:
+        """The configured links, or a simulated zenoh link per vehicle."""
+        if self.links is not None:
+            return self.links
+        return tuple(LinkConfig(sysid=v.id) for v in self.vehicles)
 
 
 @dataclass(frozen=True, eq=False)
@@ -232,6 +262,21 @@ def load_team(path: str | Path) -> Team:
                                     distances=[e.distance for e in cfg.edges])
     except FormationError as exc:
         raise ConfigError(str(path), exc.where, exc.what) from None
+    if cfg.links is not None:
+        check_links(cfg.links, gcs_system_id=cfg.gcs.system_id, source=str(path))
+        linked = {link.sysid for link in cfg.links}
+        for k, vid in enumerate(ids):
+            if vid not in linked:
+                raise ConfigError(str(path), f"vehicles[{k}].id",
+                                  f"vehicle {vid} has no entry under links")
+        for k, link in enumerate(cfg.links):
+            if link.sysid not in ids:
+                raise ConfigError(str(path), f"links[{k}].sysid",
+                                  f"system id {link.sysid} is not a vehicle of the team")
+    elif cfg.gcs.system_id in ids:
+        k = ids.index(cfg.gcs.system_id)
+        raise ConfigError(str(path), f"vehicles[{k}].id",
+                          f"{cfg.gcs.system_id} is the GCS's own system id (gcs.system_id)")
     if cfg.limits.accel_axis > cfg.limits.accel_norm:
         raise ConfigError(str(path), "limits.accel_axis",
                           f"{cfg.limits.accel_axis:g} m/s^2 exceeds limits.accel_norm "

@@ -86,10 +86,12 @@ class Runtime:
         clock: where time comes from.
         operator: the operator command the sources write to.
         recorder: optional flight recorder.
+        analysis: the team's worst-case analysis (computed if not given).
     """
 
     def __init__(self, team: Team, profiles: Mapping[int, AutopilotProfile], clock: Clock,
-                 operator: OperatorCommand, *, recorder: TlogRecorder | None = None) -> None:
+                 operator: OperatorCommand, *, recorder: TlogRecorder | None = None,
+                 analysis: Analysis | None = None) -> None:
         self.team = team
         self.ids = team.formation.ids
         missing = [vid for vid in self.ids if vid not in profiles]
@@ -100,7 +102,7 @@ class Runtime:
         self.operator = operator
         self.recorder = recorder
         self.guidance = Guidance.from_team(team)
-        self.analysis: Analysis = analyze(team)
+        self.analysis: Analysis = analysis if analysis is not None else analyze(team)
         self.safe_radius = 0.5 * self.analysis.safe_span
         self.period = 1.0 / team.config.guidance.rate_hz
         self._phase = Phase.CONNECT

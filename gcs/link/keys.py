@@ -7,6 +7,7 @@ system id 1..255 written in decimal)::
     fleet/<fleet>/vehicle/<sysid>/mavlink/from_vehicle  vehicle -> GCS MAVLink 2 frames
     fleet/<fleet>/alive/<sysid>                         liveliness token of a vehicle
     fleet/<fleet>/clock                                 sim clock (sim time, s)
+    fleet/<fleet>/clock/ack                             lockstep: the GCS is done up to t
     fleet/<fleet>/sim/<topic...>                        sim-only truth (payload pose, ropes)
 
 Each payload on a ``mavlink`` key holds one or more whole MAVLink frames.
@@ -23,6 +24,7 @@ __all__ = [
     "alive_all",
     "check_fleet",
     "clock",
+    "clock_ack",
     "mavlink",
     "mavlink_all",
     "parse_alive",
@@ -81,6 +83,11 @@ def alive_all(fleet: str) -> str:
 def clock(fleet: str) -> str:
     """Key of the sim clock samples."""
     return f"fleet/{check_fleet(fleet)}/clock"
+
+
+def clock_ack(fleet: str) -> str:
+    """Key on which a lockstep GCS reports the sim time it has finished its tick for."""
+    return f"fleet/{check_fleet(fleet)}/clock/ack"
 
 
 def sim(fleet: str, topic: str) -> str:

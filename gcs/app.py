@@ -1,0 +1,146 @@
+"""The GCS process, assembled: links, clock, operator, recorder and the 4 Hz loop.
+
+``gcs run``, ``gcs demo`` and ``gcs fly`` all build one :class:`GcsApp` from a
+team config; they differ only in where the vehicles are and which clock runs.
+With ``sim_clock`` the loop follows the simulator's clock (and, with
+``lockstep``, acknowledges every tick so the simulator never runs ahead of the
+guidance: a headless flight is then deterministic and as fast as the machine).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import struct
+import threading
+import time
+from pathlib import Path
+
+import zenoh
+
+from gcs.analysis import Analysis, analyze
+from gcs.clock import Clock, ExternalClock, WallClock
+from gcs.config import GuidanceConfig, Team
+from gcs.link import keys
+from gcs.link.encoder import MavlinkEncoder
+from gcs.link.manager import LinkManager
+from gcs.link.zenoh_session import ZenohSettings, open_session
+from gcs.operator import OperatorCommand
+from gcs.recorder import TlogRecorder
+from gcs.runtime import Runtime, RuntimeSnapshot
+from gcs.simtruth import SimTruth
+
+__all__ = ["CLOCK_CODEC", "GcsApp"]
+
+#: Sim clock and lockstep ack payload: seconds as little-endian float64.
+CLOCK_CODEC = struct.Struct("<d")
+
+
+def _safe_guidance(team: Team, analysis: Analysis) -> GuidanceConfig:
+    """The guidance config with the scale capped at the analysis' safe deformation."""
+    guidance = team.config.guidance
+    radius = float(team.formation.radii.max())
+    safe = 0.5 * analysis.safe_span / radius if radius > 0 else float("inf")
+    if safe >= guidance.scale_max:
+        return guidance
+    return dataclasses.replace(guidance, scale_max=max(1.0, 0.98 * safe))
+
+
+class GcsApp:
+    """Everything one GCS process runs for one team.
+
+    Args:
+        team: the loaded team.
+        zenoh_settings: how to join zenoh (default: the team's ``gcs.zenoh``).
+        sim_clock: follow the simulator's clock instead of the wall clock.
+        lockstep: acknowledge each tick on the sim clock (with ``sim_clock``).
+        record: .tlog file to record to, or None.
+    """
+
+    def __init__(self, team: Team, *, zenoh_settings: ZenohSettings | None = None,
+                 sim_clock: bool = False, lockstep: bool = False,
+                 record: str | Path | None = None) -> None:
+        cfg = team.config
+        self.team = team
+        self.fleet = cfg.gcs.fleet
+        settings = zenoh_settings or cfg.gcs.zenoh
+        self.session: zenoh.Session = open_session(settings)
+        self._subs: list[zenoh.Subscriber] = []
+        self._closed = False
+        self.truth: SimTruth | None = None
+        self.truth_errors = 0
+        self.clock: Clock
+        if sim_clock:
+            ext = ExternalClock(timeout=10.0)
+            self._subs.append(self.session.declare_subscriber(
+                keys.clock(self.fleet),
+                lambda s: ext.advance(CLOCK_CODEC.unpack(bytes(s.payload.to_bytes()))[0])))
+            self.clock = ext
+        else:
+            self.clock = WallClock()
+        self._subs.append(self.session.declare_subscriber(keys.sim(self.fleet, "truth"),
+                                                          self._on_truth))
+        self.links = LinkManager(cfg.vehicle_links(),
+                                 settings=dataclasses.replace(cfg.gcs, zenoh=settings),
+                                 base_dir=Path(team.source).parent, session=self.session,
+                                 clock=self.clock.now)
+        analysis = analyze(team)
+        self.operator = OperatorCommand(cfg.operator, _safe_guidance(team, analysis),
+                                        now=self.clock.now())
+        self.recorder: TlogRecorder | None = None
+        if record is not None:
+            encoder = MavlinkEncoder(system_id=cfg.gcs.system_id,
+                                     component_id=cfg.gcs.component_id)
+            self.recorder = TlogRecorder(record, encoder=encoder,
+                                         epoch=time.time() - self.clock.now())
+        self.runtime = Runtime(team, self.links.profiles, self.clock, self.operator,
+                               recorder=self.recorder, analysis=analysis)
+        if lockstep:
+            pub = self.session.declare_publisher(keys.clock_ack(self.fleet))
+            self.runtime.add_listener(
+                lambda snap: pub.put(CLOCK_CODEC.pack(snap.fleet.t)))
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    def _on_truth(self, sample: zenoh.Sample) -> None:
+        try:
+            self.truth = SimTruth.from_bytes(bytes(sample.payload.to_bytes()))
+        except ValueError:
+            self.truth_errors += 1  # dropped; the next sample replaces it
+
+    def add_listener(self, callback) -> None:  # type: ignore[no-untyped-def]
+        """Call ``callback(snapshot, truth)`` after every tick."""
+        self.runtime.add_listener(lambda snap: callback(snap, self.truth))
+
+    @property
+    def snapshot(self) -> RuntimeSnapshot | None:
+        return self.runtime.snapshot
+
+    def start(self) -> None:
+        """Run the loop on its own thread."""
+        self._thread = threading.Thread(target=self.runtime.run, args=(self._stop,),
+                                        daemon=True, name="gcs-loop")
+        self._thread.start()
+
+    def close(self) -> None:
+        """Stop the loop, close links, the recorder and zenoh; idempotent."""
+        if self._closed:
+            return
+        self._closed = True
+        self._stop.set()
+        if isinstance(self.clock, ExternalClock):
+            self.clock.close()
+        if self._thread is not None:
+            self._thread.join(timeout=3.0)
+        self.runtime.close()
+        self.links.close()
+        if self.recorder is not None:
+            self.recorder.close()
+        for sub in self._subs:
+            sub.undeclare()
+        self.session.close()
+
+    def __enter__(self) -> GcsApp:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

@@ -1,0 +1,103 @@
+"""Start the simulated team (``python -m sim``) as a child process and wait until it is up.
+
+The GCS sees simulated vehicles only through zenoh, exactly as it would see a
+``gcs sim`` started by hand on another machine; this module just saves the
+operator that step for ``gcs demo`` and ``gcs fly``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import queue
+import socket
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+__all__ = ["SimProcess", "SimStartError", "free_tcp_port"]
+
+
+class SimStartError(RuntimeError):
+    """The simulator did not come up; carries what it printed."""
+
+
+def free_tcp_port() -> int:
+    """A TCP port on 127.0.0.1 that was free a moment ago."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+class SimProcess:
+    """A running ``python -m sim``; use as a context manager (terminates it on exit).
+
+    Args:
+        config: team config file.
+        endpoint: zenoh endpoint the sim listens on, e.g. ``tcp/127.0.0.1:7447``.
+        speed: sim seconds per wall second, or ``"max"``.
+        lockstep: let the GCS's clock acks pace the sim (headless, deterministic).
+        extra: more command-line arguments for the sim.
+        ready_timeout: how long to wait for its ready line, s.
+    """
+
+    def __init__(self, config: str | Path, *, endpoint: str, speed: str = "1",
+                 lockstep: bool = False, extra: tuple[str, ...] = (),
+                 ready_timeout: float = 60.0) -> None:
+        cmd = [sys.executable, "-m", "sim", "--config", str(config), "--listen", endpoint,
+               "--speed", speed, *(["--lockstep"] if lockstep else []), *extra]
+        self.endpoint = endpoint
+        self._proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                      text=True, bufsize=1)
+        self._lines: queue.Queue[str] = queue.Queue()
+        self._err: list[str] = []
+        threading.Thread(target=self._pump, args=(self._proc.stdout, True), daemon=True).start()
+        threading.Thread(target=self._pump, args=(self._proc.stderr, False),
+                         daemon=True).start()
+        deadline = time.monotonic() + ready_timeout
+        while True:
+            try:
+                line = self._lines.get(timeout=0.1)
+            except queue.Empty:
+                line = ""
+            if line.startswith("sim ready"):
+                self.ready_line = line.strip()
+                return
+            if self._proc.poll() is not None or time.monotonic() > deadline:
+                self.close()
+                why = "exited" if self._proc.returncode is not None else "timed out"
+                detail = " | ".join(self._err[-5:]) or "no output"
+                raise SimStartError(f"the simulator {why} before it was ready: {detail}")
+
+    def _pump(self, stream, to_queue: bool) -> None:  # type: ignore[no-untyped-def]
+        for line in stream:
+            if to_queue:
+                self._lines.put(line)
+            else:
+                self._err.append(line.rstrip())
+
+    @property
+    def stderr_tail(self) -> list[str]:
+        """The last lines the sim printed on stderr."""
+        return self._err[-20:]
+
+    def alive(self) -> bool:
+        return self._proc.poll() is None
+
+    def close(self, timeout: float = 5.0) -> None:
+        """Ask the sim to stop (SIGTERM), then kill it if it does not."""
+        if self._proc.poll() is None:
+            self._proc.terminate()
+            try:
+                self._proc.wait(timeout)
+            except subprocess.TimeoutExpired:
+                self._proc.kill()
+                with contextlib.suppress(subprocess.TimeoutExpired):
+                    self._proc.wait(timeout)
+
+    def __enter__(self) -> SimProcess:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
