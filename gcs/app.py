@@ -13,6 +13,7 @@ import dataclasses
 import struct
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import zenoh
@@ -93,7 +94,8 @@ class GcsApp:
             self.recorder = TlogRecorder(record, encoder=encoder,
                                          epoch=time.time() - self.clock.now())
         self.runtime = Runtime(team, self.links.profiles, self.clock, self.operator,
-                               recorder=self.recorder, analysis=analysis)
+                               recorder=self.recorder, analysis=analysis,
+                               truth_source=lambda: self.truth)
         if lockstep:
             pub = self.session.declare_publisher(keys.clock_ack(self.fleet))
             self.runtime.add_listener(
@@ -107,9 +109,10 @@ class GcsApp:
         except ValueError:
             self.truth_errors += 1  # dropped; the next sample replaces it
 
-    def add_listener(self, callback) -> None:  # type: ignore[no-untyped-def]
-        """Call ``callback(snapshot, truth)`` after every tick."""
-        self.runtime.add_listener(lambda snap: callback(snap, self.truth))
+    def add_listener(self,
+                     callback: Callable[[RuntimeSnapshot, SimTruth | None], None]) -> None:
+        """Call ``callback(snapshot, snapshot.truth)`` after every tick (loop thread: be quick)."""
+        self.runtime.add_listener(lambda snap: callback(snap, snap.truth))
 
     @property
     def snapshot(self) -> RuntimeSnapshot | None:

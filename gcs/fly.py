@@ -53,7 +53,7 @@ def fly(team: Team, scenario: Scenario, *, speed: str = "max", record: Path | No
     try:
         with GcsApp(team, zenoh_settings=settings, sim_clock=True, lockstep=sim is not None,
                     record=record) as app:
-            app.add_listener(metrics.add)
+            app.add_listener(lambda snap, _truth: metrics.add(snap))
             app.start()
 
             def show(k: int, step: Step) -> None:

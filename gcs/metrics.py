@@ -15,7 +15,6 @@ import numpy as np
 
 from gcs.phases import Phase
 from gcs.runtime import RuntimeSnapshot
-from gcs.simtruth import SimTruth
 
 __all__ = ["FlightMetrics", "swing_angle"]
 
@@ -48,35 +47,42 @@ class FlightMetrics:
     ticks: int = 0
     _phases: list[str] = field(default_factory=list)
 
-    def add(self, snap: RuntimeSnapshot, truth: SimTruth | None = None) -> None:
-        """Account for one tick."""
-        fleet = snap.fleet
+    def add(self, snap: RuntimeSnapshot) -> None:
+        """Account for one tick of a live flight (with its ground truth in simulation)."""
+        truth = snap.truth
+        self.add_tick(snap.fleet.t, snap.phase, distance_errors=snap.distance_errors,
+                      tilt=snap.fleet.tilt, accel_cmd=snap.accel_cmd,
+                      vehicles_true=None if truth is None else np.array(truth.vehicle_p_ned),
+                      payload=None if truth is None else np.array(truth.payload_p_ned),
+                      rope_tension=None if truth is None else np.array(truth.rope_tension))
+
+    def add_tick(self, t: float, phase: Phase, *, distance_errors: np.ndarray,
+                 tilt: np.ndarray, accel_cmd: np.ndarray, vehicles_true: np.ndarray | None,
+                 payload: np.ndarray | None, rope_tension: np.ndarray | None) -> None:
+        """Account for one tick from its primitive values (live or read back from a log)."""
         if self.start is None:
-            self.start = fleet.t
-        self.end = fleet.t
+            self.start = t
+        self.end = t
         self.ticks += 1
-        phase = snap.phase.text
-        if not self._phases or self._phases[-1] != phase:
-            self._phases.append(phase)
-        if snap.phase in _FLOWN and np.all(np.isfinite(snap.distance_errors)):
-            e = float(np.abs(snap.distance_errors).max())
+        if not self._phases or self._phases[-1] != phase.text:
+            self._phases.append(phase.text)
+        if phase in _FLOWN and np.all(np.isfinite(distance_errors)):
+            e = float(np.abs(distance_errors).max())
             self.worst_distance_error = max(self.worst_distance_error, e)
             by = self.worst_distance_error_by_phase
-            by[phase] = max(by.get(phase, 0.0), e)
-        if snap.phase.airborne and np.any(np.isfinite(fleet.tilt)):
-            self.worst_bank = max(self.worst_bank, float(np.nanmax(fleet.tilt)))
+            by[phase.text] = max(by.get(phase.text, 0.0), e)
+        if phase.airborne and np.any(np.isfinite(tilt)):
+            self.worst_bank = max(self.worst_bank, float(np.nanmax(tilt)))
         self.worst_accel_cmd = max(self.worst_accel_cmd,
-                                   float(np.linalg.norm(snap.accel_cmd, axis=1).max()))
-        if truth is not None:
-            self._add_truth(truth)
-
-    def _add_truth(self, truth: SimTruth) -> None:
-        height = -truth.payload_p_ned[2]
+                                   float(np.linalg.norm(accel_cmd, axis=1).max()))
+        if payload is None or vehicles_true is None or rope_tension is None:
+            return
+        height = -float(payload[2])
         self.payload_lift = max(self.payload_lift or 0.0, height)
         if height > LIFTED:
-            swing = swing_angle(np.array(truth.vehicle_p_ned), np.array(truth.payload_p_ned))
+            swing = swing_angle(vehicles_true, payload)
             self.worst_swing = max(self.worst_swing or 0.0, swing)
-            lo, hi = min(truth.rope_tension), max(truth.rope_tension)
+            lo, hi = float(rope_tension.min()), float(rope_tension.max())
             self.rope_tension_min = lo if self.rope_tension_min is None else min(
                 self.rope_tension_min, lo)
             self.rope_tension_max = hi if self.rope_tension_max is None else max(

@@ -6,9 +6,12 @@ followed by one raw MAVLink frame, so ``pymavlink.mavutil`` and
 ``mavlogdump.py`` read it as they are. The GCS's internals travel as standard
 messages from the GCS's own system id:
 
-* ``DEBUG_FLOAT_ARRAY`` ``dist_err`` (array_id 1..): distance error per edge, m;
-  ``acc_cmd`` (array_id 101..): commanded NED acceleration x, y per vehicle,
-  m/s^2; arrays longer than 58 values continue in the next array_id;
+* ``DEBUG_FLOAT_ARRAY`` per tick, named and numbered as in :data:`ARRAYS`:
+  ``dist_err`` distance error per edge (m), ``acc_cmd`` commanded NED
+  acceleration x, y per vehicle (m/s^2), ``tilt`` per vehicle (rad); in
+  simulation also the truth: ``payload`` (p_ned, v_ned), ``rope_T`` tension per
+  rope (N), ``veh_true`` true vehicle positions (x, y, z per vehicle). Arrays
+  longer than 58 values continue in the next array_id;
 * ``NAMED_VALUE_FLOAT`` ``stk_fwd``, ``stk_rgt``, ``stk_rot``, ``scale``,
   ``alt_tgt``: the operator command; ``NAMED_VALUE_INT`` ``phase``;
 * ``STATUSTEXT`` for phase changes and safety warnings (what replay jumps to).
@@ -31,10 +34,12 @@ import numpy as np
 from gcs.link.dialect import MavMessage, mavlink
 from gcs.link.encoder import MavlinkEncoder
 
-__all__ = ["ACC_CMD_ARRAY", "DIST_ERR_ARRAY", "TlogRecorder", "chunked"]
+__all__ = ["ARRAYS", "ARRAY_SPAN", "TlogRecorder", "chunked"]
 
-DIST_ERR_ARRAY = 1
-ACC_CMD_ARRAY = 101
+#: First DEBUG_FLOAT_ARRAY array_id of each recorded array; each owns ARRAY_SPAN ids.
+ARRAYS = {"dist_err": 1, "acc_cmd": 101, "tilt": 301, "payload": 201, "rope_T": 211,
+          "veh_true": 221}
+ARRAY_SPAN = 10
 _ARRAY_LEN = 58
 _STAMP = struct.Struct(">Q")
 
@@ -89,24 +94,24 @@ class TlogRecorder:
         """Encode one of the GCS's own messages and record it."""
         self.frame(t, self._enc.encode(msg))
 
-    def internals(self, t: float, *, distance_errors: np.ndarray, accel_cmd: np.ndarray,
+    def internals(self, t: float, *, arrays: dict[str, np.ndarray],
                   sticks: tuple[float, float, float], scale: float, altitude: float,
                   phase: int) -> None:
-        """Record one tick of guidance internals."""
+        """Record one tick of guidance internals (``arrays`` named as in ARRAYS)."""
         mav = self._enc.mav
         usec = round(t * 1e6)
         ms = round(t * 1e3) & 0xFFFFFFFF
-        for base, name, values in ((DIST_ERR_ARRAY, b"dist_err", distance_errors),
-                                   (ACC_CMD_ARRAY, b"acc_cmd", accel_cmd)):
+        for name, values in arrays.items():
+            base = ARRAYS[name]
             for k, part in enumerate(chunked(values)):
                 data = np.zeros(_ARRAY_LEN)
                 data[: len(part)] = part
-                self.message(t, mav.debug_float_array_encode(usec, name, base + k,
+                self.message(t, mav.debug_float_array_encode(usec, name.encode(), base + k,
                                                              data.tolist()))
-        for name, value in ((b"stk_fwd", sticks[0]), (b"stk_rgt", sticks[1]),
-                            (b"stk_rot", sticks[2]), (b"scale", scale),
-                            (b"alt_tgt", altitude)):
-            self.message(t, mav.named_value_float_encode(ms, name, float(value)))
+        for key, value in ((b"stk_fwd", sticks[0]), (b"stk_rgt", sticks[1]),
+                           (b"stk_rot", sticks[2]), (b"scale", scale),
+                           (b"alt_tgt", altitude)):
+            self.message(t, mav.named_value_float_encode(ms, key, float(value)))
         self.message(t, mav.named_value_int_encode(ms, b"phase", int(phase)))
 
     def text(self, t: float, text: str, *, severity: int = mavlink.MAV_SEVERITY_INFO) -> None:

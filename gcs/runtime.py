@@ -38,6 +38,7 @@ from gcs.operator import OperatorCommand, OperatorSnapshot
 from gcs.phases import Action, Phase, PhaseError, next_phase
 from gcs.recorder import TlogRecorder
 from gcs.safety import SafetyVerdict, evaluate
+from gcs.simtruth import SimTruth
 
 __all__ = ["Event", "Runtime", "RuntimeSnapshot", "TickStats"]
 
@@ -75,6 +76,7 @@ class RuntimeSnapshot:
     safety: SafetyVerdict
     stats: TickStats
     events: tuple[Event, ...] = field(default=())
+    truth: SimTruth | None = None  # simulation only: the ground truth of this tick
 
 
 class Runtime:
@@ -87,11 +89,13 @@ class Runtime:
         operator: the operator command the sources write to.
         recorder: optional flight recorder.
         analysis: the team's worst-case analysis (computed if not given).
+        truth_source: in simulation, gives the latest ground truth to record.
     """
 
     def __init__(self, team: Team, profiles: Mapping[int, AutopilotProfile], clock: Clock,
                  operator: OperatorCommand, *, recorder: TlogRecorder | None = None,
-                 analysis: Analysis | None = None) -> None:
+                 analysis: Analysis | None = None,
+                 truth_source: Callable[[], SimTruth | None] | None = None) -> None:
         self.team = team
         self.ids = team.formation.ids
         missing = [vid for vid in self.ids if vid not in profiles]
@@ -101,6 +105,7 @@ class Runtime:
         self.clock = clock
         self.operator = operator
         self.recorder = recorder
+        self.truth_source = truth_source
         self.guidance = Guidance.from_team(team)
         self.analysis: Analysis = analysis if analysis is not None else analyze(team)
         self.safe_radius = 0.5 * self.analysis.safe_span
@@ -275,16 +280,22 @@ class Runtime:
             accel = self._stream(fleet, demand, op)
             self._advance(phase, op, now)
         errors = self.team.formation.distance_errors(fleet.p_ned[:, :2], demand.scale)
+        truth = self.truth_source() if self.truth_source is not None else None
         if self.recorder is not None:
-            self.recorder.internals(now, distance_errors=np.nan_to_num(errors, nan=0.0),
-                                    accel_cmd=accel,
+            arrays = {"dist_err": np.nan_to_num(errors, nan=0.0), "acc_cmd": accel,
+                      "tilt": np.nan_to_num(fleet.tilt, nan=0.0)}
+            if truth is not None:
+                arrays |= {"payload": np.array(truth.payload_p_ned + truth.payload_v_ned),
+                           "rope_T": np.array(truth.rope_tension),
+                           "veh_true": np.array(truth.vehicle_p_ned)}
+            self.recorder.internals(now, arrays=arrays,
                                     sticks=(demand.forward, demand.right, demand.rotate),
                                     scale=demand.scale, altitude=op.altitude, phase=int(phase))
         self._compute.append(time.perf_counter() - started)
         self._ticks += 1
         snap = RuntimeSnapshot(fleet=fleet, phase=self.phase, operator=op, demand=demand,
                                accel_cmd=accel, distance_errors=errors, safety=verdict,
-                               stats=self.stats(), events=self.events()[-20:])
+                               stats=self.stats(), events=self.events()[-20:], truth=truth)
         self._snapshot = snap
         for listener in self._listeners:
             try:

@@ -11,7 +11,7 @@ import pytest
 from pymavlink import mavutil
 
 from gcs.link.encoder import MavlinkEncoder
-from gcs.recorder import ACC_CMD_ARRAY, DIST_ERR_ARRAY, TlogRecorder
+from gcs.recorder import ARRAYS, TlogRecorder
 
 EPOCH = 1_700_000_000.0
 
@@ -24,8 +24,8 @@ def record(path: Path, ticks: int = 20) -> MavlinkEncoder:
         t = 0.25 * k
         hb = vehicle.mav.heartbeat_encode(2, 12, 129, 4, 4, 3)
         rec.frame(t, vehicle.encode(hb))
-        rec.internals(t, distance_errors=np.arange(6) * 0.01 * k,
-                      accel_cmd=np.full((70, 2), 0.5), sticks=(0.1, -0.2, 0.3),
+        rec.internals(t, arrays={"dist_err": np.arange(6) * 0.01 * k,
+                                 "acc_cmd": np.full((70, 2), 0.5)}, sticks=(0.1, -0.2, 0.3),
                       scale=1.05, altitude=1.5, phase=6)
         if k == 5:
             rec.text(t, "phase: formation flight")
@@ -54,8 +54,9 @@ def test_mavutil_reads_frames_internals_and_timestamps(tmp_path: Path) -> None:
     assert hb[4]._timestamp == pytest.approx(EPOCH + 1.0)
     arrays = [m for m in msgs if m.get_type() == "DEBUG_FLOAT_ARRAY"]
     ids = sorted({m.array_id for m in arrays})
-    assert ids == [DIST_ERR_ARRAY, ACC_CMD_ARRAY, ACC_CMD_ARRAY + 1, ACC_CMD_ARRAY + 2]
-    last = [m for m in arrays if m.array_id == DIST_ERR_ARRAY][-1]
+    acc = ARRAYS["acc_cmd"]
+    assert ids == [ARRAYS["dist_err"], acc, acc + 1, acc + 2]
+    last = [m for m in arrays if m.array_id == ARRAYS["dist_err"]][-1]
     assert last.data[:6] == pytest.approx(np.arange(6) * 0.19, abs=1e-6)
     assert arrays[0].get_srcSystem() == 245
     text = next(m for m in msgs if m.get_type() == "STATUSTEXT")
