@@ -64,6 +64,52 @@ def _cmd_fly(args: argparse.Namespace) -> int:
     return 0 if result.error is None else 1
 
 
+def _cmd_report(args: argparse.Namespace) -> int:
+    import json
+    from pathlib import Path
+
+    from tqdm import tqdm
+
+    from gcs.flightlog import FlightLog
+    from gcs.logreader import LogError
+    from gcs.report import write_report
+
+    path = Path(args.file)
+    out = Path(args.out) if args.out else path.with_suffix("").with_name(path.stem + "_report")
+    bars: dict[str, tqdm] = {}
+
+    def progress(stage: str, done: int, total: int) -> None:
+        if args.quiet:
+            return
+        bar = bars.get(stage)
+        if bar is None:
+            unit = "B" if stage == "index" else "msg"
+            bar = bars[stage] = tqdm(total=total, desc=stage, unit=unit, unit_scale=True,
+                                     leave=False, file=sys.stderr)
+        bar.update(done - bar.n)
+
+    try:
+        log = FlightLog.load(path, progress=progress)
+    except LogError as exc:
+        print(f"gcs report: error: {exc}", file=sys.stderr)
+        return 2
+    finally:
+        for bar in bars.values():
+            bar.close()
+    summary = write_report(log, out)
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        print(f"report of {path} in {out}/: {', '.join(summary['figures'])}, "
+              f"summary.json, summary.md")
+        for line in log.missing:
+            print(f"missing: {line}")
+        if log.index.truncated or log.index.skipped_bytes:
+            print(f"note: truncated={log.index.truncated}, "
+                  f"corrupt bytes skipped={log.index.skipped_bytes}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand."""
     parser = argparse.ArgumentParser(
@@ -107,6 +153,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     p.set_defaults(func=_cmd_fly)
+
+    p = sub.add_parser("report", help="figures and summary of a recorded flight",
+                       description="Distances and velocities (like the paper's figure), "
+                                   "top-view trajectories, distance errors, commanded "
+                                   "accelerations against limits, and a JSON/Markdown "
+                                   "summary, from a .tlog (ours or a plain autopilot log).")
+    p.add_argument("file", help="the .tlog")
+    p.add_argument("--out", metavar="DIR", help="output folder (default: <file>_report)")
+    p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_report)
     return parser
 
 

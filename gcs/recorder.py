@@ -14,6 +14,9 @@ messages from the GCS's own system id:
   longer than 58 values continue in the next array_id;
 * ``NAMED_VALUE_FLOAT`` ``stk_fwd``, ``stk_rgt``, ``stk_rot``, ``scale``,
   ``alt_tgt``: the operator command; ``NAMED_VALUE_INT`` ``phase``;
+* ``DEBUG_FLOAT_ARRAY`` ``team`` once at the start (see :func:`team_header`): the
+  vehicle ids, edges, desired distances and acceleration limits, so a log
+  explains itself without its config;
 * ``STATUSTEXT`` for phase changes and safety warnings (what replay jumps to).
 
 Timestamps follow the loop's clock (``epoch + t``), so a flight run faster than
@@ -34,11 +37,12 @@ import numpy as np
 from gcs.link.dialect import MavMessage, mavlink
 from gcs.link.encoder import MavlinkEncoder
 
-__all__ = ["ARRAYS", "ARRAY_SPAN", "TlogRecorder", "chunked"]
+__all__ = ["ARRAYS", "ARRAY_SPAN", "TlogRecorder", "chunked", "parse_team_header",
+           "team_header"]
 
 #: First DEBUG_FLOAT_ARRAY array_id of each recorded array; each owns ARRAY_SPAN ids.
 ARRAYS = {"dist_err": 1, "acc_cmd": 101, "tilt": 301, "payload": 201, "rope_T": 211,
-          "veh_true": 221}
+          "veh_true": 221, "team": 401}
 ARRAY_SPAN = 10
 _ARRAY_LEN = 58
 _STAMP = struct.Struct(">Q")
@@ -48,6 +52,32 @@ def chunked(values: np.ndarray) -> list[np.ndarray]:
     """Split a flat array into DEBUG_FLOAT_ARRAY-sized pieces (58 floats each)."""
     flat = np.asarray(values, dtype=float).ravel()
     return [flat[i : i + _ARRAY_LEN] for i in range(0, max(len(flat), 1), _ARRAY_LEN)]
+
+
+def team_header(ids: tuple[int, ...], edges: np.ndarray, distances: np.ndarray,
+                accel_norm: float, accel_axis: float) -> np.ndarray:
+    """[n, m, ids.., tail ids.., head ids.., d.., accel_norm, accel_axis] as one array."""
+    tails = [ids[i] for i in edges[:, 0]]
+    heads = [ids[j] for j in edges[:, 1]]
+    return np.array([len(ids), len(edges), *ids, *tails, *heads, *distances, accel_norm,
+                     accel_axis], dtype=float)
+
+
+def parse_team_header(values: np.ndarray) -> dict[str, object]:
+    """Inverse of :func:`team_header`; ValueError if the array is not one."""
+    try:
+        n, m = int(values[0]), int(values[1])
+        ids = tuple(int(v) for v in values[2 : 2 + n])
+        tails = [int(v) for v in values[2 + n : 2 + n + m]]
+        heads = [int(v) for v in values[2 + n + m : 2 + n + 2 * m]]
+        d = np.asarray(values[2 + n + 2 * m : 2 + n + 3 * m], dtype=float)
+        norm, axis = float(values[2 + n + 3 * m]), float(values[3 + n + 3 * m])
+    except (IndexError, ValueError) as exc:
+        raise ValueError(f"not a team header: {exc}") from None
+    index = {vid: i for i, vid in enumerate(ids)}
+    edges = np.array([[index[a], index[b]] for a, b in zip(tails, heads, strict=True)])
+    return {"ids": ids, "edges": edges, "distances": d, "accel_norm": norm,
+            "accel_axis": axis}
 
 
 class TlogRecorder:
@@ -99,20 +129,23 @@ class TlogRecorder:
                   phase: int) -> None:
         """Record one tick of guidance internals (``arrays`` named as in ARRAYS)."""
         mav = self._enc.mav
-        usec = round(t * 1e6)
         ms = round(t * 1e3) & 0xFFFFFFFF
         for name, values in arrays.items():
-            base = ARRAYS[name]
-            for k, part in enumerate(chunked(values)):
-                data = np.zeros(_ARRAY_LEN)
-                data[: len(part)] = part
-                self.message(t, mav.debug_float_array_encode(usec, name.encode(), base + k,
-                                                             data.tolist()))
+            self.array(t, name, values)
         for key, value in ((b"stk_fwd", sticks[0]), (b"stk_rgt", sticks[1]),
                            (b"stk_rot", sticks[2]), (b"scale", scale),
                            (b"alt_tgt", altitude)):
             self.message(t, mav.named_value_float_encode(ms, key, float(value)))
         self.message(t, mav.named_value_int_encode(ms, b"phase", int(phase)))
+
+    def array(self, t: float, name: str, values: np.ndarray) -> None:
+        """Record one named array (see ARRAYS), split over as many messages as it needs."""
+        usec = round(t * 1e6)
+        for k, part in enumerate(chunked(values)):
+            data = np.zeros(_ARRAY_LEN)
+            data[: len(part)] = part
+            self.message(t, self._enc.mav.debug_float_array_encode(
+                usec, name.encode(), ARRAYS[name] + k, data.tolist()))
 
     def text(self, t: float, text: str, *, severity: int = mavlink.MAV_SEVERITY_INFO) -> None:
         """Record a STATUSTEXT (phase changes, warnings); long texts are cut at 50 bytes."""

@@ -36,7 +36,7 @@ from gcs.guidance import Guidance, MotionDemand
 from gcs.link.profile import AutopilotProfile
 from gcs.operator import OperatorCommand, OperatorSnapshot
 from gcs.phases import Action, Phase, PhaseError, next_phase
-from gcs.recorder import TlogRecorder
+from gcs.recorder import TlogRecorder, team_header
 from gcs.safety import SafetyVerdict, evaluate
 from gcs.simtruth import SimTruth
 
@@ -125,6 +125,9 @@ class Runtime:
         self._snapshot: RuntimeSnapshot | None = None
         self._listeners: list[Callable[[RuntimeSnapshot], None]] = []
         if recorder is not None:
+            f, lim = team.formation, team.config.limits
+            recorder.array(clock.now(), "team", team_header(f.ids, f.edges, f.distances,
+                                                            lim.accel_norm, lim.accel_axis))
             for vid in self.ids:
                 profiles[vid].link.add_frame_listener(
                     lambda _direction, frame: recorder.frame(self.clock.now(), frame))
@@ -282,8 +285,7 @@ class Runtime:
         errors = self.team.formation.distance_errors(fleet.p_ned[:, :2], demand.scale)
         truth = self.truth_source() if self.truth_source is not None else None
         if self.recorder is not None:
-            arrays = {"dist_err": np.nan_to_num(errors, nan=0.0), "acc_cmd": accel,
-                      "tilt": np.nan_to_num(fleet.tilt, nan=0.0)}
+            arrays = {"dist_err": errors, "acc_cmd": accel, "tilt": fleet.tilt}  # NaN: unknown
             if truth is not None:
                 arrays |= {"payload": np.array(truth.payload_p_ned + truth.payload_v_ned),
                            "rope_T": np.array(truth.rope_tension),

@@ -1,0 +1,206 @@
+"""``gcs report``: figures and a summary of a recorded flight.
+
+* ``formation.png``: inter-vehicle distances against their desired values (top)
+  and x/y velocities of the vehicles (bottom), like the paper's experimental figure;
+* ``trajectories.png``: top view of the vehicles' (and the payload's) paths,
+  like the paper's trajectory plot;
+* ``distance_errors.png``: the distance error of every edge, phases shaded;
+* ``accelerations.png``: commanded accelerations against the limits;
+* ``summary.json`` and ``summary.md``: duration, worst distance error overall and
+  per phase, worst swing, worst bank, rope tensions, link losses, events, and
+  what the log does not contain.
+
+The summary's metrics come from :meth:`FlightLog.metrics`, the same code that
+``gcs fly`` runs live, so both agree for the same flight.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+
+from gcs.flightlog import FlightLog
+from gcs.phases import Phase
+
+__all__ = ["write_report"]
+
+
+def write_report(log: FlightLog, out: Path,
+                 progress: Callable[[str], None] | None = None) -> dict[str, object]:
+    """Write the figures and summaries of ``log`` into ``out``; returns the summary."""
+    out.mkdir(parents=True, exist_ok=True)
+    figures = []
+    for name, fn in (("formation.png", _formation), ("trajectories.png", _trajectories),
+                     ("distance_errors.png", _distance_errors),
+                     ("accelerations.png", _accelerations)):
+        if progress is not None:
+            progress(name)
+        fig = fn(log)
+        if fig is None:
+            continue
+        fig.savefig(out / name, dpi=110)
+        plt.close(fig)
+        figures.append(name)
+    summary = _summary(log, figures)
+    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    (out / "summary.md").write_text(_markdown(summary))
+    return summary
+
+
+def _t0(log: FlightLog) -> float:
+    starts = [log.tick_t[0]] if len(log.tick_t) else []
+    starts += [tr.t[0] for tr in log.tracks.values() if len(tr.t)]
+    return min(starts) if starts else 0.0
+
+
+def _shade_phases(ax: plt.Axes, log: FlightLog, t0: float) -> None:
+    changes = log.phase_changes()
+    colours = {Phase.FORMATION.text: "#e8f4e8", Phase.LIFTING.text: "#fff4dd",
+               Phase.SETTING_DOWN.text: "#fff4dd", Phase.ABORTING.text: "#fde0e0"}
+    for k, (t, name) in enumerate(changes):
+        end = changes[k + 1][0] if k + 1 < len(changes) else log.tick_t[-1]
+        if name in colours:
+            ax.axvspan(t - t0, end - t0, color=colours[name], zorder=0)
+
+
+def _formation(log: FlightLog) -> plt.Figure | None:
+    if not log.tracks:
+        return None
+    t0 = _t0(log)
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
+    if log.team is not None and "dist_err" in log.arrays and len(log.tick_t):
+        d = np.asarray(log.team["distances"])
+        scale = log.values.get("scale", np.ones(len(log.tick_t)))
+        desired = scale[:, None] * d[None, :]
+        actual = desired + log.arrays["dist_err"][:, : len(d)]
+        ids = log.team["ids"]
+        edges = log.team["edges"]
+        t = log.tick_t - t0
+        for k in range(len(d)):
+            i, j = edges[k]  # type: ignore[index]
+            top.plot(t, actual[:, k], lw=1.2, label=f"{ids[i]}-{ids[j]}")  # type: ignore[index]
+        for value in np.unique(np.round(desired, 3), axis=1).T:
+            top.plot(t, value, "k--", lw=0.8)
+        top.legend(ncol=6, fontsize=7, loc="upper right")
+        _shade_phases(top, log, t0)
+    else:
+        top.text(0.5, 0.5, "distances: no team header or guidance internals in this log",
+                 ha="center", va="center", transform=top.transAxes)
+    top.set_ylabel("distance [m]")
+    for sysid, tr in sorted(log.tracks.items()):
+        bottom.plot(tr.t - t0, tr.v_ned[:, 0], lw=1, label=f"{sysid} vx")
+        bottom.plot(tr.t - t0, tr.v_ned[:, 1], lw=1, ls=":", label=f"{sysid} vy")
+    bottom.set_ylabel("velocity [m/s] (x solid, y dotted)")
+    bottom.set_xlabel("time [s]")
+    bottom.legend(ncol=4, fontsize=7, loc="upper right")
+    fig.suptitle("Distances (desired dashed) and velocities")
+    fig.tight_layout()
+    return fig
+
+
+def _trajectories(log: FlightLog) -> plt.Figure | None:
+    if not log.tracks:
+        return None
+    fig, ax = plt.subplots(figsize=(7, 7))
+    for sysid, tr in sorted(log.tracks.items()):
+        ax.plot(tr.p_ned[:, 1], tr.p_ned[:, 0], lw=1, label=f"vehicle {sysid}")
+        ax.plot(tr.p_ned[-1, 1], tr.p_ned[-1, 0], "o", ms=4, color=ax.lines[-1].get_color())
+    if "payload" in log.arrays:
+        p = log.arrays["payload"]
+        ax.plot(p[:, 1], p[:, 0], "k-", lw=1.5, label="payload")
+    ax.set_xlabel("east [m]")
+    ax.set_ylabel("north [m]")
+    ax.set_aspect("equal")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title("Trajectories (top view)")
+    fig.tight_layout()
+    return fig
+
+
+def _distance_errors(log: FlightLog) -> plt.Figure | None:
+    if "dist_err" not in log.arrays or log.team is None:
+        return None
+    t0 = _t0(log)
+    fig, ax = plt.subplots(figsize=(10, 4))
+    e = log.arrays["dist_err"]
+    ids, edges = log.team["ids"], log.team["edges"]
+    for k in range(e.shape[1]):
+        i, j = edges[k]  # type: ignore[index]
+        ax.plot(log.tick_t - t0, e[:, k], lw=1, label=f"{ids[i]}-{ids[j]}")  # type: ignore[index]
+    _shade_phases(ax, log, t0)
+    ax.axhline(0, color="k", lw=0.5)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("distance error e_k [m]")
+    ax.legend(ncol=6, fontsize=7)
+    ax.set_title("Distance error per edge (formation flight shaded green)")
+    fig.tight_layout()
+    return fig
+
+
+def _accelerations(log: FlightLog) -> plt.Figure | None:
+    if "acc_cmd" not in log.arrays:
+        return None
+    t0 = _t0(log)
+    n = log.n_vehicles
+    acc = log.arrays["acc_cmd"][:, : 2 * n].reshape(len(log.tick_t), n, 2)
+    fig, ax = plt.subplots(figsize=(10, 4))
+    ids = log.team["ids"] if log.team is not None else tuple(range(1, n + 1))
+    for i in range(n):
+        ax.plot(log.tick_t - t0, np.linalg.norm(acc[:, i], axis=1), lw=1,
+                label=f"|a| {ids[i]}")  # type: ignore[index]
+    if log.team is not None:
+        ax.axhline(float(log.team["accel_norm"]), color="r", ls="--", lw=1, label="norm limit")
+        ax.axhline(float(log.team["accel_axis"]), color="m", ls=":", lw=1,
+                   label="per-axis limit")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("commanded acceleration [m/s^2]")
+    ax.legend(ncol=4, fontsize=7)
+    ax.set_title("Commanded horizontal accelerations against the limits")
+    fig.tight_layout()
+    return fig
+
+
+def _summary(log: FlightLog, figures: list[str]) -> dict[str, object]:
+    metrics = log.metrics().to_json() if len(log.tick_t) else {}
+    t0 = _t0(log)
+    return {
+        "log": str(log.index.path),
+        "messages": len(log.index),
+        "corrupt_bytes_skipped": log.index.skipped_bytes,
+        "truncated": log.index.truncated,
+        "vehicles": sorted(log.tracks),
+        "metrics": metrics,
+        "link_losses": {str(s): log.index.packets_lost(s) for s in log.index.systems()},
+        "phases": [{"t_s": round(t - t0, 2), "phase": p} for t, p in log.phase_changes()],
+        "events": [{"t_s": round(t - t0, 2), "system": s, "severity": sev, "text": txt}
+                   for t, s, sev, txt in log.texts],
+        "missing": log.missing,
+        "figures": figures,
+    }
+
+
+def _markdown(s: dict[str, object]) -> str:
+    m = s["metrics"] or {}
+    lines = [f"# Flight report: {Path(str(s['log'])).name}", ""]
+    if m:
+        lines += ["| metric | value |", "|---|---|"]
+        for key in ("duration_s", "worst_distance_error_m", "payload_lift_m", "worst_swing_rad",
+                    "worst_bank_rad", "worst_accel_cmd_m_s2", "rope_tension_min_N",
+                    "rope_tension_max_N"):
+            lines.append(f"| {key} | {m.get(key)} |")  # type: ignore[union-attr]
+        lines += ["", "Worst distance error per phase (m):", ""]
+        for phase, value in m.get("worst_distance_error_by_phase_m", {}).items():  # type: ignore[union-attr]
+            lines.append(f"- {phase}: {value}")
+    lines += ["", f"Link losses (frames missing by sequence number): {s['link_losses']}", ""]
+    if s["missing"]:
+        lines += ["Not in this log:", ""] + [f"- {x}" for x in s["missing"]]  # type: ignore[union-attr]
+    lines += ["", "Figures: " + ", ".join(s["figures"])]  # type: ignore[arg-type]
+    return "\n".join(lines) + "\n"
