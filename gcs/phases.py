@@ -68,6 +68,11 @@ class Action(enum.Enum):
     LAND = "land"
     ABORT = "abort"
 
+    @property
+    def text(self) -> str:
+        """Human-readable verb."""
+        return {"takeoff": "take off", "set_down": "set down"}.get(self.value, self.value)
+
 
 class PhaseError(RuntimeError):
     """An action that makes no sense in the current phase."""
@@ -91,6 +96,6 @@ def next_phase(phase: Phase, action: Action) -> Phase:
     allowed, target = _ALLOWED[action]
     if phase not in allowed:
         options = ", ".join(sorted(p.text for p in allowed))
-        raise PhaseError(f"cannot {action.value.replace('_', ' ')} while {phase.text} "
+        raise PhaseError(f"cannot {action.text} while {phase.text} "
                          f"(possible when: {options})")
     return target

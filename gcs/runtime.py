@@ -194,7 +194,7 @@ class Runtime:
             self.operator.set_altitude(height, now=self.clock.now())
             return
         if not self._action_busy.acquire(blocking=False):
-            raise PhaseError(f"cannot {action.value}: another action is still running")
+            raise PhaseError(f"cannot {action.text}: another action is still running")
         self._pool.submit(self._run_action, action, target)
 
     def _run_action(self, action: Action, target: Phase) -> None:
@@ -211,7 +211,7 @@ class Runtime:
                 self._set_phase(target)
                 self._for_all("land", lambda p: p.land())
         except Exception as exc:  # report, never kill the worker
-            self._event("error", f"{action.value} failed: {exc}")
+            self._event("error", f"{action.text} failed: {exc}")
             if action is Action.ARM:
                 self._for_all("disarm", lambda p: p.disarm(), quiet=True)
                 self._set_phase(Phase.READY)
