@@ -1,0 +1,73 @@
+"""Ready-made teams: default config files, world plus autopilots, a blocking take-off.
+
+For scripts, benchmarks and tests that want a flying team in a few lines; the
+sim host builds its team the same way from its own configs.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from sim.config import WorldConfig
+from sim.layout import Layout
+from sim.world import World
+from vehicles.airframe import Airframe
+from vehicles.autopilot import Autopilot
+from vehicles.config import AutopilotConfig
+from vehicles.modes import Mode
+
+__all__ = [
+    "DEFAULT_AIRFRAME",
+    "DEFAULT_AUTOPILOT_CONFIG",
+    "DEFAULT_WORLD_CONFIG",
+    "build_team",
+    "take_off",
+]
+
+_CONFIGS = Path(__file__).resolve().parent.parent / "configs"
+DEFAULT_AIRFRAME = _CONFIGS / "airframes" / "bebop2.yaml"
+"""The Bebop 2 airframe file."""
+DEFAULT_WORLD_CONFIG = _CONFIGS / "sim" / "default.yaml"
+"""The default world (ropes, ground, wind, sensors) file."""
+DEFAULT_AUTOPILOT_CONFIG = _CONFIGS / "sim" / "autopilot.yaml"
+"""The default onboard autopilot file."""
+
+
+def build_team(layout: Layout, *, payload_mass: float, rng: np.random.Generator,
+               airframe: Airframe, world_config: WorldConfig,
+               autopilot_config: AutopilotConfig,
+               autopilot_airframe: Airframe | None = None) -> tuple[World, Autopilot]:
+    """A world with the team placed as ``layout`` and one disarmed autopilot per vehicle.
+
+    ``autopilot_airframe`` is the autopilots' model of the vehicle (default: the
+    true ``airframe``); give a different one to fly with model errors.
+    """
+    world = World(airframe=airframe, config=world_config, p0_ned=layout.p0_ned,
+                  rope_length=layout.rope_length, payload_mass=payload_mass,
+                  payload_p0_ned=layout.payload_p0_ned, rng=rng)
+    autopilot = Autopilot(autopilot_airframe or airframe, autopilot_config, world.n_vehicles)
+    return world, autopilot
+
+
+def take_off(world: World, autopilot: Autopilot, altitude: float, *,
+             timeout: float = 30.0) -> None:
+    """Arm every vehicle, take off to ``altitude`` m and block until all HOLD there.
+
+    Raises RuntimeError when a command is denied or the climb takes longer
+    than ``timeout`` s of simulated time.
+    """
+    step = 1.0 / 32.0
+    world.run(autopilot, step)  # first pose samples, so the autopilots can arm
+    for i in range(world.n_vehicles):
+        for result in (autopilot.arm(i), autopilot.takeoff(i, altitude)):
+            if not result.accepted:
+                raise RuntimeError(f"vehicle {i}: take-off {result.text}")
+    waited = 0.0
+    while not all(m == Mode.HOLD for m in autopilot.modes):
+        if waited >= timeout:
+            modes = ", ".join(m.name for m in autopilot.modes)
+            raise RuntimeError(f"take-off to {altitude} m not done after {timeout} s ({modes})")
+        world.run(autopilot, step)
+        waited += step

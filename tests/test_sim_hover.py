@@ -1,0 +1,165 @@
+"""The paper's team hovering with its payload matches the force analysis of section V.
+
+Four Bebops on a 1 m square, ropes sqrt(1.25) m, 0.4 kg payload at the centre:
+eq. (T) gives the rope tension, and each vehicle must tilt so that the
+horizontal part of its thrust cancels the rope's horizontal pull. Real physics
+and real autopilots; the payload also has to stay on the ground until the ropes
+are taut.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import NamedTuple
+
+import numpy as np
+import pytest
+
+from sim.config import SensorConfig, WorldConfig, load_world_config
+from sim.layout import paper_square
+from sim.scenario import (
+    DEFAULT_AIRFRAME,
+    DEFAULT_AUTOPILOT_CONFIG,
+    DEFAULT_WORLD_CONFIG,
+    build_team,
+)
+from vehicles.airframe import load_airframe
+from vehicles.config import load_autopilot_config
+from vehicles.quaternion import quat_to_rotation
+
+PAYLOAD_MASS = 0.4
+ROPE = math.sqrt(1.25)
+DIAGONAL = math.sqrt(2.0)
+ALTITUDE = 1.5
+
+
+def paper_tension(g: float) -> float:
+    """Eq. (T): ||T|| = (M g / 4) l / sqrt(l^2 - d2^2 / 4)."""
+    return PAYLOAD_MASS * g / 4.0 * ROPE / math.sqrt(ROPE**2 - DIAGONAL**2 / 4.0)
+
+
+class Hover(NamedTuple):
+    g: float
+    vehicle_mass: float
+    tension: np.ndarray  # (samples, 4) N
+    tilt: np.ndarray  # (samples, 4) rad, angle of the thrust axis from the vertical
+    predicted_tilt: np.ndarray  # (samples, 4) rad, from each vehicle's own rope force
+    thrust_dir_dot_outward: np.ndarray  # (samples, 4)
+    takeoff_payload_height: np.ndarray  # (samples,) m above the ground
+    takeoff_rope_slack: np.ndarray  # (samples,) bool, no rope pulls
+    takeoff_lift: np.ndarray  # (samples,) sum of rope pulls upwards on the payload, N
+
+
+def fly(config: WorldConfig, seed: int) -> Hover:
+    airframe = load_airframe(DEFAULT_AIRFRAME)
+    world, autopilot = build_team(paper_square(), payload_mass=PAYLOAD_MASS,
+                                  rng=np.random.default_rng(seed), airframe=airframe,
+                                  world_config=config,
+                                  autopilot_config=load_autopilot_config(DEFAULT_AUTOPILOT_CONFIG))
+    world.run(autopilot, 1.0 / 32.0)
+    for i in range(4):
+        assert autopilot.arm(i).accepted
+        assert autopilot.takeoff(i, ALTITUDE).accepted
+    heights, slack, lift = [], [], []
+    for _ in range(6 * 128):  # the climb, sampled at 128 Hz
+        world.run(autopilot, 1.0 / 128.0)
+        tension = world.rope_tension
+        to_vehicle = world.p_ned - world.payload_p_ned
+        up = -to_vehicle[:, 2] / np.linalg.norm(to_vehicle, axis=1)
+        heights.append(config.ground.z_ned - world.payload_p_ned[2])
+        slack.append(bool(np.all(tension == 0.0)))
+        lift.append(float(np.sum(tension * up)))
+    world.run(autopilot, 6.0)  # settle in HOLD
+
+    tensions, tilts, predicted, outward = [], [], [], []
+    for _ in range(4 * 64):  # 4 s at 64 Hz
+        world.run(autopilot, 1.0 / 64.0)
+        tension = world.rope_tension
+        rope_dir = world.payload_p_ned - world.p_ned
+        rope_dir /= np.linalg.norm(rope_dir, axis=1, keepdims=True)
+        rope_force = tension[:, None] * rope_dir
+        tilt_i, pred_i, out_i = [], [], []
+        for i in range(4):
+            thrust_axis = -np.array(quat_to_rotation(*world.state.q_wxyz[i])).reshape(3, 3)[:, 2]
+            tilt_i.append(math.acos(-thrust_axis[2]))
+            pred_i.append(math.atan2(math.hypot(rope_force[i, 0], rope_force[i, 1]),
+                                     airframe.mass * config.gravity + rope_force[i, 2]))
+            horizontal = thrust_axis[:2] / np.linalg.norm(thrust_axis[:2])
+            out_i.append(float(-horizontal @ rope_dir[i, :2] / np.linalg.norm(rope_dir[i, :2])))
+        tensions.append(tension)
+        tilts.append(tilt_i)
+        predicted.append(pred_i)
+        outward.append(out_i)
+    return Hover(config.gravity, airframe.mass, np.array(tensions), np.array(tilts),
+                 np.array(predicted), np.array(outward), np.array(heights), np.array(slack),
+                 np.array(lift))
+
+
+@pytest.fixture(scope="module")
+def noisy() -> Hover:
+    """Default world: sensor noise on."""
+    return fly(load_world_config(DEFAULT_WORLD_CONFIG), seed=11)
+
+
+@pytest.fixture(scope="module")
+def quiet() -> Hover:
+    """Noise-free sensors: the symmetric equilibrium the paper analyses."""
+    config = load_world_config(DEFAULT_WORLD_CONFIG)
+    silent = SensorConfig(accel_noise_std=0.0, gyro_noise_std=0.0, position_noise_std=0.0,
+                          velocity_noise_std=0.0, attitude_noise_std=0.0)
+    return fly(dataclasses.replace(config, sensors=silent), seed=11)
+
+
+def test_each_rope_carries_the_paper_tension_in_the_symmetric_equilibrium(quiet: Hover) -> None:
+    expected = paper_tension(quiet.g)
+    per_rope = quiet.tension.mean(axis=0)
+    assert np.all(np.abs(per_rope / expected - 1.0) < 0.02), (per_rope, expected)
+
+
+def test_mean_rope_tension_matches_the_paper_with_sensor_noise(noisy: Hover) -> None:
+    # Four stiff ropes to one point are statically indeterminate: how the load
+    # splits between the two diagonals depends on sub-millimetre position
+    # differences, which sensor noise sets. The load itself, the mean tension,
+    # does not; that is what eq. (T) predicts.
+    expected = paper_tension(noisy.g)
+    assert abs(noisy.tension.mean() / expected - 1.0) < 0.02, (noisy.tension.mean(), expected)
+    assert np.all(noisy.tension.mean(axis=0) > 0.5 * expected)
+
+
+def test_vehicles_tilt_as_the_force_diagram_predicts(quiet: Hover, noisy: Hover) -> None:
+    g, m = quiet.g, quiet.vehicle_mass
+    t = paper_tension(g)
+    t_h = t * (DIAGONAL / 2.0) / ROPE
+    t_v = t * math.sqrt(ROPE**2 - DIAGONAL**2 / 4.0) / ROPE
+    paper_tilt = math.atan(t_h / (m * g + t_v))  # 9.27 degrees
+    # Noise-free the equilibrium is exact up to the rope stretch (0.25 mm):
+    # 0.05 degrees is 1 % of the horizontal force.
+    assert np.all(np.abs(quiet.tilt.mean(axis=0) - paper_tilt) < math.radians(0.05))
+    # With noise each vehicle balances its own rope: the 4 s average of the
+    # thrust tilt matches the tilt that its measured rope force requires.
+    # Noise jitters the attitude by about 0.3 degrees per sample; averaged over
+    # 256 samples (and with the small drag of the hovering jitter) 0.2 degrees
+    # is a 2 % bound on the horizontal force balance.
+    assert np.all(np.abs(noisy.tilt.mean(axis=0) - noisy.predicted_tilt.mean(axis=0))
+                  < math.radians(0.2))
+    assert np.all(noisy.tilt.mean(axis=0) > math.radians(5.0))
+    # The thrust leans away from the payload (it pulls the vehicle inwards).
+    assert np.all(noisy.thrust_dir_dot_outward.mean(axis=0) > 0.99)
+
+
+@pytest.mark.parametrize("case", ["quiet", "noisy"])
+def test_payload_stays_on_the_ground_until_the_ropes_lift_it(
+        case: str, request: pytest.FixtureRequest) -> None:
+    hover: Hover = request.getfixturevalue(case)
+    slack = hover.takeoff_rope_slack
+    assert slack[0] and not slack[-1]
+    first_taut = int(np.argmax(~slack))
+    # Resting in ground contact the payload sinks about M g / k = 2 mm.
+    assert np.all(hover.takeoff_payload_height[:first_taut] < 0.0)
+    lifted = hover.takeoff_payload_height > 0.001
+    assert int(np.argmax(lifted)) >= first_taut
+    # It leaves the ground once the ropes pull up at least its weight (the
+    # ropes snap taut while the vehicles climb, so the pull overshoots).
+    assert np.max(hover.takeoff_lift[first_taut:]) > PAYLOAD_MASS * hover.g
+    assert hover.takeoff_payload_height[-1] > 0.5
