@@ -10,7 +10,6 @@ guidance: a headless flight is then deterministic and as fast as the machine).
 from __future__ import annotations
 
 import dataclasses
-import struct
 import threading
 import time
 from collections.abc import Callable
@@ -22,6 +21,7 @@ from gcs.analysis import Analysis, analyze
 from gcs.clock import Clock, ExternalClock, WallClock
 from gcs.config import GuidanceConfig, Team
 from gcs.link import keys
+from gcs.link.clockwire import decode_time, encode_time
 from gcs.link.encoder import MavlinkEncoder
 from gcs.link.manager import LinkManager
 from gcs.link.zenoh_session import ZenohSettings, open_session
@@ -30,10 +30,7 @@ from gcs.recorder import TlogRecorder
 from gcs.runtime import Runtime, RuntimeSnapshot
 from gcs.simtruth import SimTruth
 
-__all__ = ["CLOCK_CODEC", "GcsApp"]
-
-#: Sim clock and lockstep ack payload: seconds as little-endian float64.
-CLOCK_CODEC = struct.Struct("<d")
+__all__ = ["GcsApp"]
 
 
 def _safe_guidance(team: Team, analysis: Analysis) -> GuidanceConfig:
@@ -69,13 +66,19 @@ class GcsApp:
         self._closed = False
         self.truth: SimTruth | None = None
         self.truth_errors = 0
+        self.clock_errors = 0
         self.clock: Clock
+        self._ack: zenoh.Publisher | None = None
+        self._last_ack: bytes | None = None
         if sim_clock:
             ext = ExternalClock(timeout=10.0)
-            self._subs.append(self.session.declare_subscriber(
-                keys.clock(self.fleet),
-                lambda s: ext.advance(CLOCK_CODEC.unpack(bytes(s.payload.to_bytes()))[0])))
+            self._subs.append(self.session.declare_subscriber(keys.clock(self.fleet),
+                                                              self._on_clock))
             self.clock = ext
+            if lockstep:
+                self._ack = self.session.declare_publisher(
+                    keys.clock_ack(self.fleet), congestion_control=zenoh.CongestionControl.BLOCK,
+                    express=True)
         else:
             self.clock = WallClock()
         self._subs.append(self.session.declare_subscriber(keys.sim(self.fleet, "truth"),
@@ -96,12 +99,27 @@ class GcsApp:
         self.runtime = Runtime(team, self.links.profiles, self.clock, self.operator,
                                recorder=self.recorder, analysis=analysis,
                                truth_source=lambda: self.truth)
-        if lockstep:
-            pub = self.session.declare_publisher(keys.clock_ack(self.fleet))
-            self.runtime.add_listener(
-                lambda snap: pub.put(CLOCK_CODEC.pack(snap.fleet.t)))
+        if self._ack is not None:
+            self.runtime.add_listener(lambda snap: self._send_ack(snap.fleet.t))
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
+
+    def _on_clock(self, sample: zenoh.Sample) -> None:
+        try:
+            t = decode_time(bytes(sample.payload.to_bytes()))
+        except ValueError:
+            self.clock_errors += 1
+            return
+        assert isinstance(self.clock, ExternalClock)
+        if self._ack is not None and t <= self.clock.now() and self._last_ack is not None:
+            # A repeated sample: the sim is waiting; our ack may have been lost.
+            self._ack.put(self._last_ack)
+        self.clock.advance(t)
+
+    def _send_ack(self, t: float) -> None:
+        assert self._ack is not None
+        self._last_ack = encode_time(t)
+        self._ack.put(self._last_ack)
 
     def _on_truth(self, sample: zenoh.Sample) -> None:
         try:

@@ -110,6 +110,38 @@ def _cmd_report(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_demo(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from web.launch import run_demo
+
+    return run_demo(args.config, host=args.host, port=args.port,
+                    gamepad=Path(args.gamepad) if args.gamepad else None,
+                    no_gamepad=args.no_gamepad)
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from web.launch import run_gcs
+
+    return run_gcs(args.config, host=args.host, port=args.port,
+                   record=Path(args.record) if args.record else None,
+                   gamepad=Path(args.gamepad) if args.gamepad else None,
+                   no_gamepad=args.no_gamepad)
+
+
+def _add_page_options(p: argparse.ArgumentParser) -> None:
+    """Options shared by the commands that serve the live page."""
+    p.add_argument("--port", type=int, default=8080, help="port of the page (default 8080)")
+    p.add_argument("--host", default="127.0.0.1",
+                   help="interface to serve the page on (default 127.0.0.1: this machine "
+                        "only; 0.0.0.0 for every interface)")
+    p.add_argument("--gamepad", metavar="FILE",
+                   help="gamepad mapping (default configs/gamepad.yaml if present)")
+    p.add_argument("--no-gamepad", action="store_true", help="do not read a gamepad")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand."""
     parser = argparse.ArgumentParser(
@@ -164,6 +196,24 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_report)
+
+    p = sub.add_parser("demo", help="simulated team, GCS and live page in one command",
+                       description="Starts the simulated team (1x, embedded zenoh, no router), "
+                                   "a GCS on the simulator's clock and the live page; prints "
+                                   "the page's address. Ctrl-C stops everything.")
+    p.add_argument("--config", default="configs/bebop_square.yaml",
+                   help="team config (default configs/bebop_square.yaml)")
+    _add_page_options(p)
+    p.set_defaults(func=_cmd_demo)
+
+    p = sub.add_parser("run", help="GCS with its live page for the config's vehicles",
+                       description="The GCS on the wall clock for the vehicles the config's "
+                                   "links reach (a running `gcs sim`, or real autopilots), "
+                                   "with the live page. Ctrl-C stops.")
+    p.add_argument("--config", required=True, help="team config (YAML)")
+    p.add_argument("--record", metavar="FILE", help="record the flight to a .tlog")
+    _add_page_options(p)
+    p.set_defaults(func=_cmd_run)
     return parser
 
 

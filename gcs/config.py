@@ -143,6 +143,8 @@ class OperatorConfig:
                                 gt=0.0)
     altitude_step: float = field(doc="altitude change per operator step, m", default=0.1,
                                  gt=0.0)
+    scale_rate: float = field(doc="largest rate of change of the shape's scale, 1/s",
+                              default=0.05, gt=0.0)
 
 
 @dataclass(frozen=True)
@@ -172,6 +174,9 @@ class FlightConfig:
                                  "become taut, m", default=0.15, ge=0.0)
     lift_height: float = field(doc="climb above the taut-rope altitude to lift the payload, m",
                                default=1.0, gt=0.0)
+    lift_rate: float = field(doc="climb and descent rate while lifting and setting down the "
+                             "payload, m/s: slow, so the ropes take the load gently",
+                             default=0.1, gt=0.0)
     altitude_tolerance: float = field(doc="an altitude counts as reached within this, m",
                                       default=0.1, gt=0.0)
     takeoff_timeout: float = field(doc="longest take-off before it is declared failed, s",

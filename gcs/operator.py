@@ -2,8 +2,8 @@
 
 The browser, the gamepad and scripted scenarios all write here, through the
 same methods, so they behave the same way: sticks get a deadzone and expo;
-scale moves in steps within the configured range; the altitude target is
-followed at a limited rate; guidance can be switched off. Sticks written by a
+scale moves in steps within the configured range; the scale and altitude
+targets are followed at limited rates; guidance can be switched off. Sticks written by a
 source that then goes quiet fall back to zero after ``stick_timeout`` (a
 browser tab closed with a stick held must not keep the team moving).
 
@@ -41,12 +41,16 @@ class OperatorSnapshot:
     demand: MotionDemand
     altitude: float  # rate-limited altitude target above the ground, m
     altitude_target: float  # where the operator wants to go, m
+    scale_target: float  # the shape's scale the operator asked for
     guidance_on: bool
     source: str  # who wrote the sticks last
 
 
 class OperatorCommand:
     """Sticks, scale, altitude and guidance switch of the super-vehicle.
+
+    Scale and altitude are targets followed at the configured rates: a step in
+    the desired distances would be a step disturbance to the whole team.
 
     Args:
         operator: input shaping config.
@@ -62,10 +66,12 @@ class OperatorCommand:
         self._sticks = (0.0, 0.0, 0.0)
         self._stick_time = now
         self._source = "none"
-        self._scale = 1.0
+        self._scale = 1.0  # rate-limited ramp towards the target
+        self._scale_target = 1.0
         self._alt_target = 0.0
         self._alt = 0.0
         self._alt_time = now
+        self._alt_rate = operator.altitude_rate
         self._guidance_on = True
 
     def set_sticks(self, forward: float, right: float, rotate: float, *, now: float,
@@ -87,23 +93,25 @@ class OperatorCommand:
         if not np.isfinite(scale):
             raise ValueError(f"operator scale is not a number: {scale}")
         with self._lock:
-            self._scale = float(np.clip(scale, self._g.scale_min, self._g.scale_max))
-            return self._scale
+            self._scale_target = float(np.clip(scale, self._g.scale_min, self._g.scale_max))
+            return self._scale_target
 
     def step_scale(self, steps: int) -> float:
         """Grow (+) or shrink (-) the shape by whole configured steps."""
         with self._lock:
-            current = self._scale
+            current = self._scale_target
         return self.set_scale(round(current + steps * self._g.scale_step, 6))
 
-    def set_altitude(self, altitude: float, *, now: float) -> float:
-        """Altitude target above the ground, m; followed at the configured rate."""
+    def set_altitude(self, altitude: float, *, now: float, rate: float | None = None) -> float:
+        """Altitude target above the ground, m; followed at ``rate`` m/s (default: config)."""
         if not np.isfinite(altitude):
             raise ValueError(f"operator altitude is not a number: {altitude}")
         with self._lock:
             self._advance(now)
             self._alt_target = float(np.clip(altitude, self._cfg.altitude_min,
                                              self._cfg.altitude_max))
+            self._alt_rate = self._cfg.altitude_rate if rate is None else min(
+                rate, self._cfg.altitude_rate)
             return self._alt_target
 
     def step_altitude(self, steps: int, *, now: float) -> float:
@@ -132,8 +140,10 @@ class OperatorCommand:
 
     def _advance(self, now: float) -> None:
         dt = max(0.0, now - self._alt_time)
-        step = self._cfg.altitude_rate * dt
+        step = self._alt_rate * dt
         self._alt += float(np.clip(self._alt_target - self._alt, -step, step))
+        step = self._cfg.scale_rate * dt
+        self._scale += float(np.clip(self._scale_target - self._scale, -step, step))
         self._alt_time = now
 
     def snapshot(self, now: float) -> OperatorSnapshot:
@@ -149,4 +159,5 @@ class OperatorCommand:
                                   scale=self._scale)
             return OperatorSnapshot(demand=demand, altitude=self._alt,
                                     altitude_target=self._alt_target,
+                                    scale_target=self._scale_target,
                                     guidance_on=self._guidance_on, source=self._source)

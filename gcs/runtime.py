@@ -114,6 +114,7 @@ class Runtime:
         self._lock = threading.Lock()
         self._events: collections.deque[Event] = collections.deque(maxlen=200)
         self._active_warnings: set[tuple[str, int]] = set()
+        self._modes: dict[int, str] = {}
         self._pool = ThreadPoolExecutor(max_workers=max(2, len(self.ids)),
                                         thread_name_prefix="gcs-action")
         self._action_busy = threading.Lock()
@@ -191,7 +192,8 @@ class Runtime:
             base = self.taut_altitude(scale)
             height = base + (self.team.config.flight.lift_height if action is Action.LIFT
                              else -self.team.config.flight.takeoff_slack)
-            self.operator.set_altitude(height, now=self.clock.now())
+            self.operator.set_altitude(height, now=self.clock.now(),
+                                       rate=self.team.config.flight.lift_rate)
             return
         if not self._action_busy.acquire(blocking=False):
             raise PhaseError(f"cannot {action.text}: another action is still running")
@@ -263,11 +265,15 @@ class Runtime:
         started = time.perf_counter()
         now = self.clock.now()
         fleet = read_fleet(self.ids, self.profiles, now)
-        verdict = evaluate(self.team.config.safety, self.ids, fleet.age, fleet.p_ned,
-                           safe_radius=self.safe_radius)
+        if self.phase is Phase.CONNECT:  # presence is the pre-flight check's business
+            verdict = SafetyVerdict(freeze=True, land=False, events=())
+        else:
+            verdict = evaluate(self.team.config.safety, self.ids, fleet.age, fleet.p_ned,
+                               safe_radius=self.safe_radius)
         self._report_safety(verdict)
         op = self.operator.snapshot(now)
         phase = self.phase
+        self._report_modes(fleet, phase)
         if phase is Phase.CONNECT:
             self._preflight(fleet)
         elif phase is Phase.LANDING and np.all(np.isfinite(fleet.heartbeat_age)) \
@@ -348,6 +354,15 @@ class Runtime:
                 self._pool.submit(self._run_action, Action.LAND, Phase.LANDING)
             else:  # an action is stuck: land directly
                 self._pool.submit(self._for_all, "land", lambda p: p.land(), quiet=True)
+
+    def _report_modes(self, fleet: FleetState, phase: Phase) -> None:
+        """A vehicle changing mode on its own while the GCS streams is a warning."""
+        for vid, mode in zip(fleet.ids, fleet.modes, strict=True):
+            before = self._modes.get(vid)
+            self._modes[vid] = mode
+            if before is not None and mode != before:
+                level = "warning" if phase.streaming else "info"
+                self._event(level, f"vehicle {vid}: mode {mode} (was {before})")
 
     def _report_safety(self, verdict: SafetyVerdict) -> None:
         active = set()

@@ -121,6 +121,8 @@ def play(scenario: Scenario, runtime: Runtime, clock: Clock, *,
         now = clock.now()
         if step.action is not None:
             action = Action(step.action)
+            if runtime.phase is Phase.CONNECT:
+                _wait_ready(runtime, clock, step.timeout, where)
             try:
                 runtime.request(action)
             except Exception as exc:
@@ -154,6 +156,21 @@ def _check_not_aborted(runtime: Runtime, where: str) -> None:
         last = [e.text for e in runtime.events() if e.level != "info"]
         raise ScenarioError(f"{where}: the flight was aborted"
                             + (f" ({last[-1]})" if last else ""))
+
+
+def _wait_ready(runtime: Runtime, clock: Clock, timeout: float, where: str) -> None:
+    """Wait for the pre-flight checks (every vehicle present and fresh, analysis passes)."""
+    start = clock.now()
+    while runtime.phase is Phase.CONNECT:
+        if clock.now() - start > timeout:
+            fleet = runtime.snapshot.fleet if runtime.snapshot is not None else None
+            silent = [] if fleet is None else [
+                vid for vid, age in zip(fleet.ids, fleet.age, strict=True) if not age < 1.0]
+            warnings = [e.text for e in runtime.events() if e.level != "info"]
+            why = (f"vehicles {silent} not heard from" if silent else
+                   warnings[-1] if warnings else "pre-flight checks did not pass")
+            raise ScenarioError(f"{where}: not ready after {timeout:g} s: {why}")
+        clock.sleep_until(clock.now() + runtime.period)
 
 
 def _wait_phase(runtime: Runtime, clock: Clock, phase: Phase, timeout: float,

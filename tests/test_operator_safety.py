@@ -32,8 +32,11 @@ def test_sticks_scale_and_timeout() -> None:
     assert snap.source == "browser"
     assert op.snapshot(1.5).demand.forward == 0.0  # source went quiet
     assert op.step_scale(+3) == pytest.approx(1.15)
+    assert op.snapshot(3.0).demand.scale == pytest.approx(1.0 + 1.5 * 0.05)  # ramps
+    assert op.snapshot(10.0).demand.scale == pytest.approx(1.15)
     assert op.step_scale(+100) == pytest.approx(1.5)
     assert op.set_scale(0.1) == pytest.approx(0.5)
+    assert op.snapshot(100.0).demand.scale == pytest.approx(0.5)
     with pytest.raises(ValueError, match="forward from pad"):
         op.set_sticks(float("nan"), 0, 0, now=1.0, source="pad")
 

@@ -26,13 +26,14 @@ class ZenohTransport:
     """A :class:`~gcs.link.transport.Transport` over one zenoh session (shared, not owned)."""
 
     def __init__(self, session: zenoh.Session, *, tx_key: str, rx_key: str,
-                 description: str | None = None) -> None:
+                 description: str | None = None,
+                 congestion: zenoh.CongestionControl = zenoh.CongestionControl.DROP) -> None:
         self._session = session
         self._tx_key = tx_key
         self._rx_key = rx_key
         self._description = description or f"zenoh {tx_key} / {rx_key}"
         self._publisher: zenoh.Publisher | None = session.declare_publisher(
-            tx_key, congestion_control=zenoh.CongestionControl.DROP, express=True)
+            tx_key, congestion_control=congestion, express=True)
         self._subscriber: zenoh.Subscriber | None = None
         self._lock = threading.Lock()
         self.callback_errors = 0
@@ -40,10 +41,16 @@ class ZenohTransport:
 
     @classmethod
     def for_gcs(cls, session: zenoh.Session, *, fleet: str, sysid: int) -> ZenohTransport:
-        """The GCS end of vehicle ``sysid``'s link."""
+        """The GCS end of vehicle ``sysid``'s link.
+
+        Commands and setpoints are few and must not vanish in a congested queue
+        (two lost setpoints put a vehicle in hold), so they block rather than drop;
+        the vehicles' telemetry drops (the latest sample wins).
+        """
         return cls(session, tx_key=keys.mavlink(fleet, sysid, keys.Direction.TO_VEHICLE),
                    rx_key=keys.mavlink(fleet, sysid, keys.Direction.FROM_VEHICLE),
-                   description=f"zenoh fleet/{fleet}/vehicle/{sysid}")
+                   description=f"zenoh fleet/{fleet}/vehicle/{sysid}",
+                   congestion=zenoh.CongestionControl.BLOCK)
 
     @classmethod
     def for_vehicle(cls, session: zenoh.Session, *, fleet: str, sysid: int) -> ZenohTransport:

@@ -1,0 +1,250 @@
+"""A gamepad on the GCS side: sticks, altitude, scale, guidance switch and abort.
+
+The paper's operator flew the team with a gamepad; here it is read through
+pygame/SDL on the GCS machine and written to the same
+:class:`~gcs.operator.OperatorCommand` as the browser (source ``"gamepad"``).
+The mapping from SDL axis and button numbers is a YAML file
+(``configs/gamepad.yaml``), so any pad works without code changes.
+
+* Harmless when no pad is present: SDL runs with the dummy video driver (no
+  window) and the thread just waits for one to be plugged in.
+* Hot-plug tolerant: a pad can come and go at any time; when the pad in use
+  goes away while steering, the sticks are centred at once.
+* A pad at rest does not fight other sources: sticks inside the deadzone are
+  not written (one zero is written when they come back to the centre).
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import threading
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from gcs.clock import Clock
+from gcs.operator import OperatorCommand
+from gcs.typed_config import field, from_mapping, load_yaml
+
+__all__ = [
+    "AxisMap",
+    "Gamepad",
+    "GamepadAxes",
+    "GamepadButtons",
+    "GamepadConfig",
+    "GamepadMapper",
+    "load_gamepad_config",
+]
+
+_log = logging.getLogger(__name__)
+
+SOURCE = "gamepad"
+
+
+@dataclass(frozen=True)
+class AxisMap:
+    """One SDL joystick axis."""
+
+    axis: int = field(doc="SDL axis number", ge=0)
+    invert: bool = field(doc="flip the sign (SDL reports a stick pushed up as negative)",
+                         default=False)
+
+    def read(self, axes: Sequence[float]) -> float:
+        """The axis value in [-1, 1] (0 if the pad has fewer axes)."""
+        if self.axis >= len(axes):
+            return 0.0
+        value = max(-1.0, min(1.0, float(axes[self.axis])))
+        return -value if self.invert else value
+
+
+@dataclass(frozen=True)
+class GamepadAxes:
+    """Which axis moves what (positive: forward, right, clockwise from above, up)."""
+
+    forward: AxisMap = field(doc="translation along the team's forward axis")
+    right: AxisMap = field(doc="translation to the team's right")
+    rotate: AxisMap = field(doc="rotation about the centroid, positive clockwise from above")
+    altitude: AxisMap = field(doc="climb (positive) or descend")
+
+
+@dataclass(frozen=True)
+class GamepadButtons:
+    """Which SDL button number does what."""
+
+    scale_up: int = field(doc="grow the shape by one step", ge=0)
+    scale_down: int = field(doc="shrink the shape by one step", ge=0)
+    guidance_on: int = field(doc="switch the formation motion on", ge=0)
+    guidance_off: int = field(doc="switch the formation motion off (the team holds)", ge=0)
+    abort: int = field(doc="abort: freeze the motion, hold, then land", ge=0)
+
+
+@dataclass(frozen=True)
+class GamepadConfig:
+    """The pad's mapping; see configs/gamepad.yaml."""
+
+    axes: GamepadAxes = field(doc="axis mapping")
+    buttons: GamepadButtons = field(doc="button mapping")
+    deadzone: float = field(doc="axis values within this of the centre count as released",
+                            default=0.08, ge=0.0, lt=1.0)
+    altitude_rate: float = field(doc="altitude target rate at full deflection, m/s",
+                                 default=0.3, gt=0.0)
+    poll_hz: float = field(doc="how often the pad is read, Hz", default=50.0, gt=0.0, le=500.0)
+    device: str = field(doc="use the first pad whose name contains this (empty: any pad)",
+                        default="")
+
+    def __post_init__(self) -> None:
+        b = self.buttons
+        numbers = [b.scale_up, b.scale_down, b.guidance_on, b.guidance_off, b.abort]
+        if len(set(numbers)) != len(numbers):
+            raise ValueError(f"buttons: each action needs its own button, got {numbers}")
+
+
+def load_gamepad_config(path: str | Path) -> GamepadConfig:
+    """Load and validate a gamepad mapping; ConfigError (one line) on any mistake."""
+    return from_mapping(GamepadConfig, load_yaml(path), str(path))
+
+
+class GamepadMapper:
+    """Turns the pad's axes and button presses into operator commands (no SDL here).
+
+    Args:
+        config: the mapping.
+        operator: where the commands go.
+        clock: the loop's clock.
+        on_abort: called when the abort button is pressed.
+    """
+
+    def __init__(self, config: GamepadConfig, operator: OperatorCommand, clock: Clock, *,
+                 on_abort: Callable[[], None]) -> None:
+        self.config = config
+        self._operator = operator
+        self._clock = clock
+        self._on_abort = on_abort
+        self._active = False
+
+    def _centred(self, value: float) -> float:
+        return 0.0 if abs(value) <= self.config.deadzone else value
+
+    def axes(self, axes: Sequence[float], dt: float) -> None:
+        """Apply the axes held for ``dt`` seconds."""
+        a = self.config.axes
+        now = self._clock.now()
+        sticks = tuple(self._centred(m.read(axes)) for m in (a.forward, a.right, a.rotate))
+        if any(sticks) or self._active:
+            self._operator.set_sticks(*sticks, now=now, source=SOURCE)
+        self._active = any(sticks)
+        climb = self._centred(a.altitude.read(axes))
+        if climb:
+            target = self._operator.snapshot(now).altitude_target
+            self._operator.set_altitude(target + climb * self.config.altitude_rate * dt, now=now)
+
+    def button(self, number: int) -> None:
+        """Act on a button press."""
+        b = self.config.buttons
+        if number == b.abort:
+            self._on_abort()
+        elif number == b.scale_up:
+            self._operator.step_scale(1)
+        elif number == b.scale_down:
+            self._operator.step_scale(-1)
+        elif number == b.guidance_on:
+            self._operator.set_guidance(True)
+        elif number == b.guidance_off:
+            self._operator.set_guidance(False)
+
+    def lost(self) -> None:
+        """The pad went away: centre the sticks if it was steering."""
+        if self._active:
+            self._operator.release(now=self._clock.now(), source=f"{SOURCE} unplugged")
+            self._active = False
+
+
+class Gamepad:
+    """Reads the pad on its own thread; ``start()`` then ``close()``.
+
+    SDL is set up on that thread with no window (``SDL_VIDEODRIVER=dummy``
+    unless set) and background joystick events allowed.
+
+    Args:
+        config: the mapping.
+        operator: where the commands go.
+        clock: the loop's clock.
+        on_abort: called when the abort button is pressed (on the pad's thread).
+    """
+
+    def __init__(self, config: GamepadConfig, operator: OperatorCommand, clock: Clock, *,
+                 on_abort: Callable[[], None]) -> None:
+        self.mapper = GamepadMapper(config, operator, clock, on_abort=on_abort)
+        self._config = config
+        self._stop = threading.Event()
+        self._ready = threading.Event()
+        self._error: str | None = None
+        self._thread = threading.Thread(target=self._run, daemon=True, name="gamepad")
+        self._pad = None  # the pygame Joystick in use
+        self._pad_id = -1
+        self.name: str | None = None
+        """Name of the pad in use, None while there is none."""
+
+    def start(self, *, timeout: float = 5.0) -> None:
+        """Start reading; returns once SDL is up (RuntimeError if it cannot start)."""
+        self._thread.start()
+        if not self._ready.wait(timeout) or self._error is not None:
+            raise RuntimeError(f"gamepad: SDL did not start: {self._error or 'timed out'}")
+
+    def close(self) -> None:
+        """Stop reading; idempotent."""
+        self._stop.set()
+        if self._thread.is_alive():
+            self._thread.join(timeout=2.0)
+
+    def _run(self) -> None:
+        os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+        os.environ.setdefault("SDL_JOYSTICK_ALLOW_BACKGROUND_EVENTS", "1")
+        os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
+        try:
+            import pygame
+
+            pygame.display.init()
+            pygame.joystick.init()
+        except Exception as exc:  # no pygame, or SDL cannot start: say so in start()
+            self._error = f"{type(exc).__name__}: {exc}"
+            self._ready.set()
+            return
+        self._ready.set()
+        period = 1.0 / self._config.poll_hz
+        try:
+            while not self._stop.wait(period):
+                for event in pygame.event.get():
+                    self._event(pygame, event)
+                pad = self._pad
+                if pad is not None:
+                    self.mapper.axes([pad.get_axis(k) for k in range(pad.get_numaxes())],
+                                     period)
+        finally:
+            pygame.joystick.quit()
+            pygame.display.quit()
+
+    def _event(self, pygame, event) -> None:  # type: ignore[no-untyped-def]
+        if event.type == pygame.JOYDEVICEADDED and self._pad is None:
+            self._open(pygame, event.device_index)
+        elif event.type == pygame.JOYDEVICEREMOVED and event.instance_id == self._pad_id:
+            _log.warning("gamepad %s unplugged", self.name)
+            self.mapper.lost()
+            self._pad, self._pad_id, self.name = None, -1, None
+            for index in range(pygame.joystick.get_count()):
+                if self._open(pygame, index):
+                    break
+        elif event.type == pygame.JOYBUTTONDOWN and event.instance_id == self._pad_id:
+            self.mapper.button(event.button)
+
+    def _open(self, pygame, index: int) -> bool:  # type: ignore[no-untyped-def]
+        """Use joystick ``index`` if its name matches the config."""
+        pad = pygame.joystick.Joystick(index)
+        if self._config.device and self._config.device not in pad.get_name():
+            return False
+        pad.init()
+        self._pad, self._pad_id, self.name = pad, pad.get_instance_id(), pad.get_name()
+        _log.info("gamepad %s: %d axes, %d buttons", self.name, pad.get_numaxes(),
+                  pad.get_numbuttons())
+        return True
