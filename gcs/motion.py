@@ -120,9 +120,11 @@ class MotionBasis:
         """Slot coefficients (n, S) of ``c1 A_v`` and of ``A_a`` (eq. udi's ``A`` is their
         sum), each local to its vehicle."""
         f = self.formation
-        A_a = centripetal_matrix(A_v, f.incidence, scale * f.distances)
         z = f.relative(f.positions)
-        a_star = A_a @ (z / np.linalg.norm(z, axis=1, keepdims=True))  # (n, 2)
+        zhat = z / np.linalg.norm(z, axis=1, keepdims=True)
+        # Proposition 1's A_a zhat, evaluated right to left: O(n m), not O(n m^2)
+        v_star = A_v @ zhat
+        a_star = A_v @ ((f.incidence.T @ v_star) / (scale * f.distances)[:, None])  # (n, 2)
         alpha_a = np.einsum("isk,ik->is", self.pinv, a_star)
         return c1 * edges_to_slots(f, A_v), alpha_a * f.slot_mask
 

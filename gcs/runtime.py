@@ -74,7 +74,7 @@ class RuntimeSnapshot:
     accel_cmd: np.ndarray  # (n, 2) NED m/s^2 sent this tick (zeros when not streaming)
     distance_errors: np.ndarray  # (m,) m, NaN while unknown
     safety: SafetyVerdict
-    stats: TickStats
+    compute_time: float  # s, this tick (Runtime.stats() has the percentiles)
     events: tuple[Event, ...] = field(default=())
     truth: SimTruth | None = None  # simulation only: the ground truth of this tick
 
@@ -303,7 +303,8 @@ class Runtime:
         self._ticks += 1
         snap = RuntimeSnapshot(fleet=fleet, phase=self.phase, operator=op, demand=demand,
                                accel_cmd=accel, distance_errors=errors, safety=verdict,
-                               stats=self.stats(), events=self.events()[-20:], truth=truth)
+                               compute_time=self._compute[-1], events=self.events()[-20:],
+                               truth=truth)
         self._snapshot = snap
         for listener in self._listeners:
             try:

@@ -1,0 +1,128 @@
+"""Cost of one GCS tick (telemetry in, guidance, setpoints out) for 4 and 100 vehicles.
+
+A real GCS process part (GcsApp: links over a real zenoh session, runtime,
+guidance, MAVLink encoding) runs on the wall clock at the team's guidance rate
+while this script plays the vehicles: each publishes HEARTBEAT,
+LOCAL_POSITION_NED and ATTITUDE at 20 Hz on its zenoh key, so every tick reads
+fresh telemetry of every vehicle and sends every vehicle a setpoint. The
+runtime is put in formation flight directly (the phase machine is not what is
+measured). Prints one JSON object on its last line: per-tick compute time
+(p50, p99, max, ms) and tick start jitter p99 (ms) per team size.
+
+Targets: at most 1 ms per tick for 100 vehicles; jitter p99 at most 2 ms.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from gcs.app import GcsApp
+from gcs.config import load_team
+from gcs.link import keys
+from gcs.link.encoder import MavlinkEncoder
+from gcs.link.zenoh_session import ZenohSettings, open_session
+from gcs.phases import Phase
+from gcs.simprocess import free_tcp_port
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def ring_team(n: int, folder: Path) -> Path:
+    """A rigid ring of n vehicles (ring plus chords to the next-but-one), as a team file."""
+    radius = max(1.0, 0.6 * n / (2 * math.pi))
+    vehicles = [{"id": i + 1, "position": [radius * math.cos(2 * math.pi * i / n),
+                                           radius * math.sin(2 * math.pi * i / n)]}
+                for i in range(n)]
+    pairs = {frozenset((i + 1, (i + k) % n + 1)) for i in range(n) for k in (1, 2)}
+    edges = [sorted(p) for p in sorted(pairs, key=sorted)]
+    team = {"name": f"ring{n}", "airframe": str(ROOT / "configs/airframes/bebop2.yaml"),
+            "vehicles": vehicles, "edges": edges,
+            "guidance": {"c1": 0.17, "c2": 0.3, "rate_hz": 4.0},
+            "limits": {"bank_deg": 20.0, "accel_norm": 1.0, "accel_axis": 0.7},
+            "payload": {"mass": 0.1, "rope_length": radius * 1.5},
+            "safety": {"geofence_xy": 1000.0},
+            "gcs": {"fleet": f"bench{n}"}}
+    path = folder / f"ring{n}.yaml"
+    path.write_text(yaml.safe_dump(team))
+    return path
+
+
+def play_vehicles(session, fleet: str, positions: np.ndarray, stop: threading.Event) -> None:  # type: ignore[no-untyped-def]
+    """Publish each vehicle's telemetry at 20 Hz until ``stop``."""
+    n = len(positions)
+    pubs = [session.declare_publisher(keys.mavlink(fleet, i + 1, keys.Direction.FROM_VEHICLE))
+            for i in range(n)]
+    encs = [MavlinkEncoder(system_id=i + 1, component_id=1) for i in range(n)]
+    t0 = time.monotonic()
+    while not stop.is_set():
+        ms = int((time.monotonic() - t0) * 1000)
+        for i, (pub, enc) in enumerate(zip(pubs, encs, strict=True)):
+            x, y = positions[i]
+            pub.put(enc.encode(enc.mav.heartbeat_encode(2, 0, 129, 4, 4)))
+            pub.put(enc.encode(enc.mav.local_position_ned_encode(ms, x, y, -1.5, 0.1, 0.0, 0.0)))
+            pub.put(enc.encode(enc.mav.attitude_encode(ms, 0.01, 0.02, 0.0, 0.0, 0.0, 0.0)))
+        stop.wait(0.05)
+
+
+def measure(n: int, seconds: float, folder: Path) -> dict[str, float]:
+    path = ring_team(n, folder)
+    team = load_team(path)
+    endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
+    # the vehicles play in another process, as they would on the network
+    player = subprocess.Popen([sys.executable, __file__, "--play", str(path), endpoint])
+    try:
+        with GcsApp(team, zenoh_settings=ZenohSettings(mode="peer", connect=(endpoint,))) as app:
+            deadline = time.monotonic() + 10
+            while len(app.links.missing()) and time.monotonic() < deadline:
+                time.sleep(0.05)
+            app.runtime._set_phase(Phase.FORMATION)  # measure the streaming tick itself
+            app.operator.set_sticks(0.5, 0.2, 0.3, now=app.clock.now(), source="bench")
+            compute: list[float] = []
+            app.add_listener(lambda snap, _t: compute.append(snap.compute_time))
+            app.start()
+            time.sleep(seconds)
+            stats = app.runtime.stats()
+    finally:
+        player.terminate()
+        player.wait(timeout=5)
+    c = np.array(compute[2:]) * 1e3
+    return {"ticks": len(c), "tick_ms_p50": round(float(np.percentile(c, 50)), 3),
+            "tick_ms_p99": round(float(np.percentile(c, 99)), 3),
+            "tick_ms_max": round(float(c.max()), 3),
+            "jitter_ms_p99": round(stats.jitter_p99 * 1e3, 3)}
+
+
+def play(path: str, endpoint: str) -> None:
+    """The vehicles' process: listen on ``endpoint`` and publish telemetry until killed."""
+    team = load_team(path)
+    session = open_session(ZenohSettings(mode="peer", listen=(endpoint,), connect=()))
+    rng = np.random.default_rng(0)
+    positions = team.formation.positions + rng.normal(0, 0.05, team.formation.positions.shape)
+    play_vehicles(session, team.config.gcs.fleet, positions, threading.Event())
+
+
+def main() -> None:
+    if len(sys.argv) == 4 and sys.argv[1] == "--play":
+        play(sys.argv[2], sys.argv[3])
+        return
+    seconds = float(sys.argv[1]) if len(sys.argv) > 1 else 10.0
+    out = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for n in (4, 100):
+            out[f"vehicles_{n}"] = measure(n, seconds, Path(tmp))
+            print(f"{n} vehicles: {out[f'vehicles_{n}']}", file=sys.stderr)
+    print(json.dumps(out))
+
+
+if __name__ == "__main__":
+    main()
