@@ -12,7 +12,7 @@ from __future__ import annotations
 import dataclasses
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 
 import zenoh
@@ -22,8 +22,11 @@ from gcs.clock import Clock, ExternalClock, WallClock
 from gcs.config import GuidanceConfig, Team
 from gcs.link import keys
 from gcs.link.clockwire import decode_time, encode_time
+from gcs.link.dialect import MavMessage, mavlink
 from gcs.link.encoder import MavlinkEncoder
+from gcs.link.link import Link
 from gcs.link.manager import LinkManager
+from gcs.link.transport import FrameDirection
 from gcs.link.zenoh_session import ZenohSettings, open_session
 from gcs.operator import OperatorCommand
 from gcs.recorder import TlogRecorder
@@ -31,6 +34,51 @@ from gcs.runtime import Runtime, RuntimeSnapshot
 from gcs.simtruth import SimTruth
 
 __all__ = ["GcsApp"]
+
+
+ECHO_WAIT = 0.2
+"""Longest wall time a lockstep ack waits for the vehicles' setpoint echoes, s."""
+
+
+class _EchoCounter:
+    """Counts setpoints sent to and echoed by each vehicle (lockstep ordering)."""
+
+    def __init__(self, links: Iterable[Link]) -> None:
+        self._cond = threading.Condition()
+        self._sent: dict[int, int] = {}
+        self._echoed: dict[int, int] = {}
+        for link in links:
+            sysid = link.sysid
+            self._sent[sysid] = self._echoed[sysid] = 0
+            link.add_frame_listener(lambda d, frame, s=sysid: self._on_frame(s, d, frame))
+            link.add_message_listener(lambda msg, s=sysid: self._on_message(s, msg))
+
+    def _on_frame(self, sysid: int, direction: FrameDirection, frame: bytes) -> None:
+        if direction is FrameDirection.OUT and _msgid(frame) == _SETPOINT_ID:
+            with self._cond:
+                self._sent[sysid] += 1
+
+    def _on_message(self, sysid: int, msg: MavMessage) -> None:
+        if msg.get_type() == "POSITION_TARGET_LOCAL_NED":
+            with self._cond:
+                self._echoed[sysid] += 1
+                self._cond.notify_all()
+
+    def wait(self, timeout: float) -> bool:
+        """Block until every sent setpoint was echoed (True) or ``timeout`` passed."""
+        with self._cond:
+            return self._cond.wait_for(
+                lambda: all(self._echoed[s] >= n for s, n in self._sent.items()), timeout)
+
+
+_SETPOINT_ID = mavlink.MAVLINK_MSG_ID_SET_POSITION_TARGET_LOCAL_NED
+
+
+def _msgid(frame: bytes) -> int:
+    """Message id from a MAVLink 2 frame header (-1 for anything else)."""
+    if len(frame) < 10 or frame[0] != 0xFD:
+        return -1
+    return frame[7] | frame[8] << 8 | frame[9] << 16
 
 
 def _safe_guidance(team: Team, analysis: Analysis) -> GuidanceConfig:
@@ -100,6 +148,7 @@ class GcsApp:
                                recorder=self.recorder, analysis=analysis,
                                truth_source=lambda: self.truth)
         if self._ack is not None:
+            self._echo = _EchoCounter(self.links.links.values())
             self.runtime.add_listener(lambda snap: self._send_ack(snap.fleet.t))
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -117,7 +166,15 @@ class GcsApp:
         self.clock.advance(t)
 
     def _send_ack(self, t: float) -> None:
+        """Let the sim run the next period, once it has taken this tick's setpoints.
+
+        Zenoh delivers different keys on different callback threads, so an ack
+        could overtake the setpoints it follows; the vehicles' echoes of the
+        setpoints (POSITION_TARGET_LOCAL_NED) prove they arrived. An echo lost on
+        the way costs at most ``ECHO_WAIT`` of wall time, never a stall.
+        """
         assert self._ack is not None
+        self._echo.wait(ECHO_WAIT)
         self._last_ack = encode_time(t)
         self._ack.put(self._last_ack)
 
