@@ -290,6 +290,7 @@ class Runtime:
             self._advance(phase, op, now)
         errors = self.team.formation.distance_errors(fleet.p_ned[:, :2], demand.scale)
         truth = self.truth_source() if self.truth_source is not None else None
+        phase = self.phase  # after this tick's transitions: the recorder and the snapshot agree
         if self.recorder is not None:
             arrays = {"dist_err": errors, "acc_cmd": accel, "tilt": fleet.tilt}  # NaN: unknown
             if truth is not None:
@@ -301,7 +302,7 @@ class Runtime:
                                     scale=demand.scale, altitude=op.altitude, phase=int(phase))
         self._compute.append(time.perf_counter() - started)
         self._ticks += 1
-        snap = RuntimeSnapshot(fleet=fleet, phase=self.phase, operator=op, demand=demand,
+        snap = RuntimeSnapshot(fleet=fleet, phase=phase, operator=op, demand=demand,
                                accel_cmd=accel, distance_errors=errors, safety=verdict,
                                compute_time=self._compute[-1], events=self.events()[-20:],
                                truth=truth)

@@ -1,0 +1,95 @@
+"""A shortened flight end to end (sim process + zenoh + MAVLink + GCS), then its report.
+
+Real parts only: `gcs fly` starts `python -m sim` as its own process, the GCS
+reaches the vehicles over zenoh on loopback with MAVLink 2, the recorder writes
+a .tlog, and `gcs report` reads it back.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from gcs.flightlog import FlightLog
+
+SQUARE = "configs/bebop_square.yaml"
+SHORT = "configs/scenarios/short_flight.yaml"
+
+
+def gcs(*args: str, timeout: float = 300) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "gcs", *args], capture_output=True, text=True,
+                          timeout=timeout, check=False)
+
+
+@pytest.fixture(scope="module")
+def flight(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict, Path]:
+    log = tmp_path_factory.mktemp("flight") / "short.tlog"
+    out = gcs("fly", "--config", SQUARE, "--scenario", SHORT, "--json", "--record", str(log))
+    assert out.returncode == 0, out.stdout + out.stderr
+    return json.loads(out.stdout.splitlines()[-1]), log
+
+
+def test_short_flight_lifts_the_payload_and_keeps_the_shape(flight) -> None:  # type: ignore[no-untyped-def]
+    m, _ = flight
+    assert m["completed"] and m["error"] is None
+    assert m["phases"][-1] == "landed"
+    assert {"lifting", "formation", "setting down"} <= set(m["phases"])
+    assert m["payload_lift_m"] > 0.8  # lift height 1 m above the taut-rope altitude
+    assert m["worst_distance_error_m"] <= 0.30  # the paper's flight figure
+    assert m["worst_swing_rad"] < 0.2
+    assert 0.0 < m["worst_bank_rad"] < 0.36  # below the 20 degree bank limit (+ noise)
+    assert 0.5 < m["rope_tension_min_N"] < m["rope_tension_max_N"] < 3.0
+    assert m["real_time_factor"] > 1.0  # faster than real time
+
+
+def test_missing_scenario_is_one_line() -> None:
+    out = gcs("fly", "--config", SQUARE, "--scenario", "configs/scenarios/missing.yaml")
+    assert out.returncode == 2
+    assert "missing.yaml: cannot read file" in out.stderr
+
+
+def test_report_matches_the_flight(flight, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    m, log = flight
+    out = gcs("report", str(log), "--out", str(tmp_path), "--json", "--quiet")
+    assert out.returncode == 0, out.stderr
+    summary = json.loads(out.stdout)
+    for name in ("formation.png", "trajectories.png", "distance_errors.png",
+                 "accelerations.png", "summary.json", "summary.md"):
+        assert (tmp_path / name).stat().st_size > 1000 or name.endswith((".json", ".md"))
+    r = summary["metrics"]
+    for key in ("worst_distance_error_m", "payload_lift_m", "worst_swing_rad",
+                "worst_bank_rad", "worst_accel_cmd_m_s2", "rope_tension_max_N"):
+        assert r[key] == pytest.approx(m[key], abs=2e-3), key
+    assert r["duration_s"] == pytest.approx(m["duration_s"], abs=0.01)
+    assert r["phases"] == m["phases"]
+    for phase, value in m["worst_distance_error_by_phase_m"].items():
+        assert r["worst_distance_error_by_phase_m"][phase] == pytest.approx(value, abs=2e-3)
+    assert summary["missing"] == []
+    assert summary["vehicles"] == [1, 2, 3, 4]
+
+
+def test_truncated_log_still_reports(flight, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    _, log = flight
+    cut = tmp_path / "cut.tlog"
+    data = log.read_bytes()
+    cut.write_bytes(data[: len(data) // 2 + 5])
+    out = gcs("report", str(cut), "--out", str(tmp_path / "r"), "--quiet")
+    assert out.returncode == 0, out.stderr
+    assert "truncated=True" in out.stdout
+    parsed = FlightLog.load(cut)
+    assert parsed.index.truncated and len(parsed.tick_t) > 10
+
+
+def test_empty_and_garbage_logs_are_refused_in_one_line(tmp_path: Path) -> None:
+    empty = tmp_path / "empty.tlog"
+    empty.write_bytes(b"")
+    out = gcs("report", str(empty), "--quiet")
+    assert out.returncode == 2 and "empty file" in out.stderr
+    junk = tmp_path / "junk.tlog"
+    junk.write_bytes(bytes(range(256)) * 40)
+    out = gcs("report", str(junk), "--quiet")
+    assert out.returncode == 2 and "no MAVLink messages" in out.stderr
