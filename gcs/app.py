@@ -23,6 +23,7 @@ from gcs.config import GuidanceConfig, Team
 from gcs.link import keys
 from gcs.link.clockwire import decode_time, encode_time
 from gcs.link.dialect import MavMessage, mavlink
+from gcs.link.discovery import Presence, PresenceEvent
 from gcs.link.encoder import MavlinkEncoder
 from gcs.link.link import Link
 from gcs.link.manager import LinkManager
@@ -131,10 +132,11 @@ class GcsApp:
             self.clock = WallClock()
         self._subs.append(self.session.declare_subscriber(keys.sim(self.fleet, "truth"),
                                                           self._on_truth))
+        self.runtime: Runtime | None = None
         self.links = LinkManager(cfg.vehicle_links(),
                                  settings=dataclasses.replace(cfg.gcs, zenoh=settings),
                                  base_dir=Path(team.source).parent, session=self.session,
-                                 clock=self.clock.now)
+                                 clock=self.clock.now, on_presence=self._on_presence)
         analysis = analyze(team)
         self.operator = OperatorCommand(cfg.operator, _safe_guidance(team, analysis),
                                         now=self.clock.now())
@@ -152,6 +154,11 @@ class GcsApp:
             self.runtime.add_listener(lambda snap: self._send_ack(snap.fleet.t))
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
+
+    def _on_presence(self, event: PresenceEvent) -> None:
+        if self.runtime is not None:
+            level = "info" if event.presence is Presence.APPEARED else "warning"
+            self.runtime.note(level, event.text)
 
     def _on_clock(self, sample: zenoh.Sample) -> None:
         try:

@@ -160,6 +160,12 @@ class Runtime:
         r = scale * float(self.team.formation.radii.max())
         return math.sqrt(max(cfg.payload.rope_length**2 - r**2, 0.0))
 
+    def note(self, level: str, text: str) -> None:
+        """Add an event from outside the loop (link presence, UI, gamepad): shown and logged."""
+        if level not in ("info", "warning", "error"):
+            raise ValueError(f"event level must be info, warning or error, got {level!r}")
+        self._event(level, text)
+
     def _event(self, level: str, text: str) -> None:
         t = self.clock.now()
         with self._lock:

@@ -1,0 +1,100 @@
+"""Safety rules against the real simulator: a vehicle's link cut, a vehicle killed.
+
+The sim runs as its own process (lockstep with the GCS's clock); the control
+topic of the sim breaks a vehicle on purpose, as a failing radio or a crash
+would.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+
+import pytest
+
+from gcs.app import GcsApp
+from gcs.config import load_team
+from gcs.link import keys
+from gcs.link.zenoh_session import ZenohSettings
+from gcs.phases import Action, Phase
+from gcs.safety import SafetyReason
+from gcs.scenario import Scenario, Step, play
+from gcs.simprocess import SimProcess, free_tcp_port
+
+TEAM = load_team("configs/bebop_square.yaml")
+
+
+@pytest.fixture
+def flying() -> Iterator[GcsApp]:
+    """The paper's team in formation flight with the payload lifted, forward stick held."""
+    endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
+    with SimProcess(TEAM.source, endpoint=endpoint, speed="max", lockstep=True), \
+            GcsApp(TEAM, zenoh_settings=ZenohSettings(connect=(endpoint,)), sim_clock=True,
+                   lockstep=True) as app:
+        app.start()
+        play(Scenario(name="up", steps=(Step(action="arm"), Step(action="takeoff"),
+                                          Step(action="lift"))), app.runtime, app.clock)
+        assert app.runtime.phase is Phase.FORMATION
+        yield app
+
+
+def break_vehicle(app: GcsApp, action: str, sysid: int) -> None:
+    app.session.put(keys.sim(app.fleet, "control"),
+                    f'{{"action": "{action}", "sysid": {sysid}}}'.encode())
+
+
+def hold_sticks(app: GcsApp, seconds: float) -> None:
+    end = app.clock.now() + seconds
+    while app.clock.now() < end:
+        app.operator.set_sticks(0.6, 0.0, 0.0, now=app.clock.now(), source="test")
+        app.clock.sleep_until(app.clock.now() + 0.25)
+
+
+def test_cut_link_freezes_the_motion_then_lands_the_team(flying: GcsApp) -> None:
+    app = flying
+    hold_sticks(app, 2.0)
+    snap = app.runtime.snapshot
+    assert snap is not None and snap.demand.forward > 0.3  # moving (stick 0.6 after expo)
+    break_vehicle(app, "cut", 3)
+    cut_at = app.clock.now()
+    while app.runtime.snapshot.safety.events == ():
+        hold_sticks(app, 0.25)
+        assert app.clock.now() - cut_at < 1.5, "stale telemetry not reported"
+    snap = app.runtime.snapshot
+    assert snap.safety.freeze
+    assert [(e.reason, e.vehicle) for e in snap.safety.events] == [(SafetyReason.STALE, 3)]
+    assert snap.demand.forward == 0.0  # motion frozen although the stick is held
+    assert snap.phase is Phase.FORMATION
+    assert any("vehicle 3" in e.text and e.level == "warning" for e in app.runtime.events())
+    # silent for longer than safety.land_after (3 s): the team lands
+    hold_sticks(app, TEAM.config.safety.land_after + 1.0)
+    assert app.runtime.phase in (Phase.ABORTING, Phase.LANDING, Phase.LANDED)
+
+
+def test_killed_vehicle_is_reported_gone_and_the_team_lands(flying: GcsApp) -> None:
+    app = flying
+    break_vehicle(app, "kill", 2)
+    killed_at = time.monotonic()
+
+    def gone() -> bool:
+        return any("vehicle 2 vanished" in e.text and e.level == "warning"
+                   for e in app.runtime.events())
+
+    while not gone():
+        time.sleep(0.05)
+        assert time.monotonic() - killed_at < 1.0, "killed vehicle not reported within 1 s"
+    app.clock.sleep_until(app.clock.now() + TEAM.config.safety.land_after + 1.5)
+    assert app.runtime.phase in (Phase.ABORTING, Phase.LANDING, Phase.LANDED)
+    texts = [e.text for e in app.runtime.events()]
+    assert any("vehicle 2" in t and "landing the team" in t for t in texts)
+
+
+def test_abort_holds_then_lands(flying: GcsApp) -> None:
+    app = flying
+    hold_sticks(app, 1.0)
+    app.runtime.request(Action.ABORT)
+    assert app.runtime.phase is Phase.ABORTING
+    app.clock.sleep_until(app.clock.now() + 0.5)
+    assert app.runtime.snapshot.demand.forward == 0.0
+    app.clock.sleep_until(app.clock.now() + TEAM.config.flight.abort_hold + 1.0)
+    assert app.runtime.phase in (Phase.LANDING, Phase.LANDED)
