@@ -33,7 +33,7 @@ def refused(tmp_path: Path, mutate, field: str, words: str) -> str:  # type: ign
 
 
 def test_the_shipped_configs_load() -> None:
-    for path in Path("configs").glob("*.yaml"):
+    for path in Path("configs").glob("bebop_*.yaml"):
         load_team(path)
 
 
