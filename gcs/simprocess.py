@@ -8,7 +8,9 @@ operator that step for ``gcs demo`` and ``gcs fly``.
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import queue
+import signal
 import socket
 import subprocess
 import sys
@@ -21,6 +23,14 @@ __all__ = ["SimProcess", "SimStartError", "free_tcp_port"]
 
 class SimStartError(RuntimeError):
     """The simulator did not come up; carries what it printed."""
+
+
+def _die_with_parent() -> None:
+    """In the child: get SIGTERM when the GCS dies, even by SIGKILL (Linux), so no sim
+    is left flying headless."""
+    if sys.platform.startswith("linux"):
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
 
 
 def free_tcp_port() -> int:
@@ -49,7 +59,7 @@ class SimProcess:
                "--speed", speed, *(["--lockstep"] if lockstep else []), *extra]
         self.endpoint = endpoint
         self._proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                      text=True, bufsize=1)
+                                      text=True, bufsize=1, preexec_fn=_die_with_parent)
         self._lines: queue.Queue[str] = queue.Queue()
         self._err: list[str] = []
         threading.Thread(target=self._pump, args=(self._proc.stdout, True), daemon=True).start()

@@ -8,6 +8,7 @@ import pytest
 import yaml
 
 from gcs.config import ConfigError, load_team
+from gcs.gamepad import load_gamepad_config
 
 SQUARE = Path("configs/bebop_square.yaml")
 
@@ -35,6 +36,7 @@ def refused(tmp_path: Path, mutate, field: str, words: str) -> str:  # type: ign
 def test_the_shipped_configs_load() -> None:
     for path in Path("configs").glob("bebop_*.yaml"):
         load_team(path)
+    load_gamepad_config(Path("configs/gamepad.yaml"))
 
 
 def test_missing_field(tmp_path: Path) -> None:

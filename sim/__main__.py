@@ -1,0 +1,127 @@
+"""``python -m sim``: host a whole simulated team behind MAVLink (zenoh, optionally UDP).
+
+Prints one line once every endpoint is up, e.g.::
+
+    sim ready: fleet default, 4 vehicles, zenoh listen tcp/127.0.0.1:7447, speed 1x
+
+then runs until SIGINT/SIGTERM (or ``--duration``). A bad configuration is
+one line on stderr and exit status 2; endpoints that cannot be opened (a
+port in use) exit with status 1. See sim/HOST.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import signal
+import sys
+from collections.abc import Sequence
+
+from gcs.config import load_team
+from gcs.link.zenoh_session import DEFAULT_ENDPOINT
+from gcs.typed_config import ConfigError
+from sim.config import load_world_config
+from sim.host import SimHost
+from sim.options import HostOptions
+from sim.scenario import DEFAULT_AUTOPILOT_CONFIG, DEFAULT_WORLD_CONFIG
+from sim.udp import DEFAULT_BASE_PORT, DEFAULT_GCS_PORT
+from vehicles.config import load_autopilot_config
+
+__all__ = ["main"]
+
+_BAD_CONFIG = 2
+_CANNOT_START = 1
+
+
+_MAX = "max"
+
+
+def _speed(text: str) -> str | float:
+    """``"max"`` or a positive number."""
+    if text == _MAX:
+        return _MAX
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number or 'max', got {text!r}") from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"speed must be positive, got {text}")
+    return value
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="python -m sim",
+        description="Simulate a team of quadrotors carrying a payload; every vehicle is a "
+                    "MAVLink 2 system on zenoh (and UDP with --udp).")
+    p.add_argument("--config", required=True, help="team file, e.g. configs/bebop_square.yaml")
+    p.add_argument("--speed", type=_speed, default=None, metavar="N|max",
+                   help="sim seconds per wall second (default 1; max with --lockstep)")
+    p.add_argument("--lockstep", action="store_true",
+                   help="never run more than one guidance period past the GCS's clock ack")
+    p.add_argument("--udp", action="store_true",
+                   help="also open a MAVLink UDP port per vehicle (SITL style)")
+    p.add_argument("--udp-base-port", type=int, default=DEFAULT_BASE_PORT, metavar="P",
+                   help=f"UDP port of the first vehicle, vehicle k at P+k "
+                        f"(default {DEFAULT_BASE_PORT})")
+    p.add_argument("--udp-gcs-port", type=int, default=DEFAULT_GCS_PORT, metavar="P",
+                   help=f"ground-station port on 127.0.0.1 every vehicle sends to "
+                        f"(default {DEFAULT_GCS_PORT}; 0: none, only answer peers)")
+    p.add_argument("--listen", action="extend", nargs="+", default=[], metavar="EP",
+                   help=f"zenoh endpoints to listen on (default {DEFAULT_ENDPOINT})")
+    p.add_argument("--connect", action="extend", nargs="+", default=[], metavar="EP",
+                   help="zenoh endpoints to connect to (default none)")
+    p.add_argument("--seed", type=int, default=0, help="seed of sensor noise and gusts")
+    p.add_argument("--duration", type=float, default=None, metavar="S",
+                   help="stop after S seconds of sim time (default: run until stopped)")
+    p.add_argument("--fleet", default=None,
+                   help="fleet name in the zenoh keys (default: the team file's gcs.fleet)")
+    return p
+
+
+def _options(args: argparse.Namespace) -> HostOptions:
+    if args.speed is None:
+        speed = None if args.lockstep else 1.0
+    else:
+        speed = None if args.speed == _MAX else float(args.speed)
+    return HostOptions(speed=speed, lockstep=args.lockstep,
+                       listen=tuple(args.listen) or (DEFAULT_ENDPOINT,),
+                       connect=tuple(args.connect), udp=args.udp,
+                       udp_base_port=args.udp_base_port, udp_gcs_port=args.udp_gcs_port or None,
+                       seed=args.seed, duration=args.duration, fleet=args.fleet)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the sim host; returns the exit status."""
+    args = _parser().parse_args(argv)
+    logging.basicConfig(level=logging.INFO, format="sim: %(message)s", stream=sys.stderr)
+    try:
+        options = _options(args)
+        team = load_team(args.config)
+        world_config = load_world_config(DEFAULT_WORLD_CONFIG)
+        autopilot_config = load_autopilot_config(DEFAULT_AUTOPILOT_CONFIG)
+    except (ConfigError, ValueError) as exc:
+        print(f"sim: error: {exc}", file=sys.stderr)
+        return _BAD_CONFIG
+    try:
+        host = SimHost(team, options, world_config=world_config,
+                       autopilot_config=autopilot_config)
+    except ConfigError as exc:  # a signing key file named by the team file
+        print(f"sim: error: {exc}", file=sys.stderr)
+        return _BAD_CONFIG
+    except (RuntimeError, OSError) as exc:
+        print(f"sim: error: {exc}", file=sys.stderr)
+        return _CANNOT_START
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda *_: host.stop())
+    try:
+        print(host.ready_line(), flush=True)
+        host.run()
+    finally:
+        host.close()
+    logging.getLogger("sim").info("stopped at t = %.3f s", host.t)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,147 @@
+"""The sim host's side of zenoh: vehicle links and tokens, clock, truth, acks and control.
+
+Why: everything the sim process says or hears on zenoh goes through this
+one object, so the keys (all from :mod:`gcs.link.keys`) and the wire formats
+are in one place and the host loop never touches zenoh directly:
+
+=================================================  =====  ======================================
+key                                                dir    payload
+=================================================  =====  ======================================
+``fleet/<f>/vehicle/<sysid>/mavlink/from_vehicle`` out    one MAVLink 2 frame
+``fleet/<f>/vehicle/<sysid>/mavlink/to_vehicle``   in     MAVLink 2 frames
+``fleet/<f>/alive/<sysid>``                        token  liveliness, while the vehicle lives
+``fleet/<f>/clock``                                out    sim time (:mod:`gcs.link.clockwire`)
+``fleet/<f>/clock/ack``                            in     lockstep ack (:mod:`gcs.link.clockwire`)
+``fleet/<f>/sim/truth``                            out    :class:`gcs.simtruth.SimTruth` JSON
+``fleet/<f>/sim/control``                          in     :mod:`sim.control` JSON
+=================================================  =====  ======================================
+
+Receivers run on zenoh's threads and only push events into the host's
+:class:`~sim.inbox.Inbox`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+from collections.abc import Sequence
+
+import zenoh
+
+from gcs.link import keys
+from gcs.link.clockwire import decode_time, encode_time
+from gcs.link.zenoh_session import ZenohSettings, open_session
+from gcs.link.zenoh_transport import ZenohTransport, declare_alive
+from gcs.simtruth import SimTruth
+from sim.inbox import ClockAck, ControlMessage, Frame, Inbox
+
+__all__ = ["CONTROL_TOPIC", "TRUTH_TOPIC", "HostFabric"]
+
+_log = logging.getLogger(__name__)
+
+TRUTH_TOPIC = "truth"
+"""Sim topic of the ground truth samples."""
+
+CONTROL_TOPIC = "control"
+"""Sim topic of the control messages (kill, cut, restore)."""
+
+
+class _VehicleLink:
+    """One vehicle's zenoh transport and liveliness token."""
+
+    def __init__(self, session: zenoh.Session, fleet: str, sysid: int, index: int,
+                 inbox: Inbox) -> None:
+        # Frames block rather than drop: on loopback a full queue means a busy CPU, not a
+        # radio, and lost telemetry would make lockstep runs differ. A peer that goes away
+        # closes its link, so nothing waits on it for long.
+        self.transport = ZenohTransport(
+            session, tx_key=keys.mavlink(fleet, sysid, keys.Direction.FROM_VEHICLE),
+            rx_key=keys.mavlink(fleet, sysid, keys.Direction.TO_VEHICLE),
+            description=f"zenoh vehicle end fleet/{fleet}/vehicle/{sysid}",
+            congestion=zenoh.CongestionControl.BLOCK)
+        self.transport.start(lambda data: inbox.put(Frame(index, data, None)))
+        self.token: zenoh.LivelinessToken | None = declare_alive(session, fleet=fleet,
+                                                                 sysid=sysid)
+
+    def close(self) -> None:
+        self.transport.close()
+        if self.token is not None:
+            with contextlib.suppress(zenoh.ZError):
+                self.token.undeclare()
+            self.token = None
+
+
+class HostFabric:
+    """Opens the host's zenoh session and declares everything; :meth:`close` undoes it."""
+
+    def __init__(self, settings: ZenohSettings, *, fleet: str, sysids: Sequence[int],
+                 inbox: Inbox) -> None:
+        self._fleet = keys.check_fleet(fleet)
+        self._settings = settings
+        self._session = open_session(settings)
+        self._links: dict[int, _VehicleLink] = {}
+        self._subscribers: list[zenoh.Subscriber] = []
+        try:
+            self._clock = self._session.declare_publisher(
+                keys.clock(fleet), congestion_control=zenoh.CongestionControl.DROP, express=True)
+            self._truth = self._session.declare_publisher(
+                keys.sim(fleet, TRUTH_TOPIC), congestion_control=zenoh.CongestionControl.DROP,
+                express=True)
+            self._subscribers.append(self._session.declare_subscriber(
+                keys.clock_ack(fleet), lambda s: self._on_ack(s, inbox)))
+            self._subscribers.append(self._session.declare_subscriber(
+                keys.sim(fleet, CONTROL_TOPIC),
+                lambda s: inbox.put(ControlMessage(s.payload.to_bytes()))))
+            for index, sysid in enumerate(sysids):
+                self._links[index] = _VehicleLink(self._session, fleet, sysid, index, inbox)
+        except BaseException:
+            self.close()
+            raise
+
+    @property
+    def fleet(self) -> str:
+        """The fleet name in every key."""
+        return self._fleet
+
+    @property
+    def settings(self) -> ZenohSettings:
+        """How the session joined zenoh (listen and connect endpoints)."""
+        return self._settings
+
+    def send_frame(self, index: int, frame: bytes) -> None:
+        """Publish a frame of vehicle ``index`` (dropped once the vehicle is gone)."""
+        link = self._links.get(index)
+        if link is not None:
+            link.transport.send(frame)
+
+    def drop_vehicle(self, index: int) -> None:
+        """Vehicle ``index`` is gone: close its link and undeclare its token."""
+        link = self._links.pop(index, None)
+        if link is not None:
+            link.close()
+
+    def publish_clock(self, t: float) -> None:
+        """Publish the sim time."""
+        self._clock.put(encode_time(t))
+
+    def publish_truth(self, truth: SimTruth) -> None:
+        """Publish one ground-truth sample."""
+        self._truth.put(truth.to_bytes())
+
+    def close(self) -> None:
+        """Undeclare everything and close the session; idempotent."""
+        for index in list(self._links):
+            self.drop_vehicle(index)
+        for sub in self._subscribers:
+            with contextlib.suppress(zenoh.ZError):
+                sub.undeclare()
+        self._subscribers.clear()
+        with contextlib.suppress(zenoh.ZError):
+            self._session.close()
+
+    @staticmethod
+    def _on_ack(sample: zenoh.Sample, inbox: Inbox) -> None:
+        try:
+            inbox.put(ClockAck(decode_time(sample.payload.to_bytes())))
+        except ValueError as exc:
+            _log.warning("ignored clock ack: %s", exc)

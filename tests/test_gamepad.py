@@ -1,0 +1,227 @@
+"""The gamepad: its YAML mapping, and a real (virtual) SDL joystick driving the operator.
+
+SDL's virtual joysticks (``SDL_JoystickAttachVirtual``, SDL >= 2.0.14) are real
+devices to SDL: they are plugged in and out, raise the same hot-plug events and
+report axes and buttons through the same calls as a USB pad. They work
+headless, so the reader is tested end to end without hardware or mocks.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import glob
+import os
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import pytest
+
+from gcs.clock import WallClock
+from gcs.config import GuidanceConfig, OperatorConfig
+from gcs.gamepad import Gamepad, GamepadConfig, GamepadMapper, load_gamepad_config
+from gcs.operator import OperatorCommand
+from gcs.typed_config import ConfigError, from_mapping
+
+ROOT = Path(__file__).resolve().parents[1]
+MAPPING = ROOT / "configs" / "gamepad.yaml"
+OP = OperatorConfig(deadzone=0.05, expo=0.0, stick_timeout=5.0, altitude_max=4.0)
+GUI = GuidanceConfig(c1=0.17, c2=0.55)
+
+
+def operator() -> tuple[OperatorCommand, WallClock]:
+    clock = WallClock()
+    return OperatorCommand(OP, GUI, now=clock.now()), clock
+
+
+def mapping(**changes: object) -> GamepadConfig:
+    raw = {
+        "axes": {"forward": {"axis": 4, "invert": True}, "right": {"axis": 3},
+                 "rotate": {"axis": 0}, "altitude": {"axis": 1, "invert": True}},
+        "buttons": {"scale_up": 5, "scale_down": 4, "guidance_on": 7, "guidance_off": 6,
+                    "abort": 1},
+    }
+    return from_mapping(GamepadConfig, raw | changes, "test")
+
+
+# -- the mapping ----------------------------------------------------------------------
+
+
+def test_the_shipped_mapping_loads() -> None:
+    config = load_gamepad_config(MAPPING)
+    assert config.axes.forward.axis == 4 and config.axes.forward.invert
+    assert config.buttons.abort == 1 and config.deadzone == pytest.approx(0.08)
+
+
+def test_a_wrong_mapping_is_refused_in_one_line(tmp_path: Path) -> None:
+    bad = tmp_path / "pad.yaml"
+    bad.write_text(MAPPING.read_text().replace("scale_down: 4", "scale_down: 5"))
+    with pytest.raises(ConfigError, match="each action needs its own button"):
+        load_gamepad_config(bad)
+    bad.write_text(MAPPING.read_text().replace("deadzone:", "dead_zone:"))
+    with pytest.raises(ConfigError, match=r"pad.yaml: dead_zone: unknown field"):
+        load_gamepad_config(bad)
+    bad.write_text(MAPPING.read_text().replace("axis: 3}", "axis: -3}"))
+    with pytest.raises(ConfigError, match=r"axes.right.axis: must be at least 0"):
+        load_gamepad_config(bad)
+
+
+def test_axes_become_sticks_only_outside_the_deadzone() -> None:
+    op, clock = operator()
+    op.set_sticks(0.0, 0.7, 0.0, now=clock.now(), source="browser#1")
+    pad = GamepadMapper(mapping(), op, clock, on_abort=lambda: None)
+    pad.axes([0.02, 0.0, 0.0, -0.03, 0.05, 0.0], dt=0.02)  # a pad at rest
+    assert op.snapshot(clock.now()).source == "browser#1"  # not overridden
+    pad.axes([0.5, 0.0, 0.0, 0.25, -1.0, 0.0], dt=0.02)
+    snap = op.snapshot(clock.now())
+    assert snap.source == "gamepad"
+    assert (snap.demand.forward, snap.demand.right) == (pytest.approx(1.0), pytest.approx(0.2105,
+                                                                                          abs=1e-3))
+    assert snap.demand.rotate > 0.4
+    pad.axes([0.0] * 6, dt=0.02)  # back to the centre: one zero is written
+    assert op.snapshot(clock.now()).demand.forward == 0.0
+    op.set_sticks(0.0, -0.6, 0.0, now=clock.now(), source="browser#1")
+    pad.axes([0.0] * 6, dt=0.02)
+    assert op.snapshot(clock.now()).source == "browser#1"
+
+
+def test_the_altitude_axis_moves_the_target_at_its_rate() -> None:
+    op, clock = operator()
+    pad = GamepadMapper(mapping(altitude_rate=0.5), op, clock, on_abort=lambda: None)
+    for _ in range(50):
+        pad.axes([0.0, -1.0, 0.0, 0.0, 0.0, 0.0], dt=0.02)  # left stick up for 1 s
+    assert op.snapshot(clock.now()).altitude_target == pytest.approx(0.5)
+
+
+def test_buttons_scale_switch_guidance_and_abort() -> None:
+    op, clock = operator()
+    aborts: list[float] = []
+    pad = GamepadMapper(mapping(), op, clock, on_abort=lambda: aborts.append(clock.now()))
+    pad.button(5)
+    pad.button(5)
+    pad.button(4)
+    assert op.snapshot(clock.now()).scale_target == pytest.approx(1.05)
+    pad.button(6)
+    assert not op.snapshot(clock.now()).guidance_on
+    pad.button(7)
+    assert op.snapshot(clock.now()).guidance_on
+    pad.button(2)  # not mapped: nothing
+    assert not aborts
+    pad.button(1)
+    assert len(aborts) == 1
+
+
+# -- a virtual SDL joystick -----------------------------------------------------------
+
+
+def _sdl() -> ctypes.CDLL:
+    """The SDL library pygame itself loaded (same process-wide joystick state)."""
+    pygame = pytest.importorskip("pygame", reason="the gamepad reader needs pygame")
+    base = Path(pygame.__file__).parent
+    candidates = [*glob.glob(str(base.parent / "pygame.libs" / "libSDL2-*")),
+                  *glob.glob(str(base / ".dylibs" / "libSDL2*")),
+                  *glob.glob(str(base / "SDL2.dll"))]
+    if not candidates:
+        pytest.skip("cannot find the SDL library bundled with pygame")
+    sdl = ctypes.CDLL(candidates[0])
+    if not hasattr(sdl, "SDL_JoystickAttachVirtual"):
+        pytest.skip("pygame's SDL has no virtual joysticks (needs SDL >= 2.0.14)")
+    sdl.SDL_JoystickAttachVirtual.restype = ctypes.c_int
+    sdl.SDL_JoystickAttachVirtual.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_int,
+                                              ctypes.c_int]
+    sdl.SDL_JoystickOpen.restype = ctypes.c_void_p
+    sdl.SDL_JoystickOpen.argtypes = [ctypes.c_int]
+    sdl.SDL_JoystickClose.argtypes = [ctypes.c_void_p]
+    sdl.SDL_JoystickDetachVirtual.argtypes = [ctypes.c_int]
+    sdl.SDL_JoystickSetVirtualAxis.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.c_int16]
+    sdl.SDL_JoystickSetVirtualButton.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.c_uint8]
+    sdl.SDL_NumJoysticks.restype = ctypes.c_int
+    return sdl
+
+
+class VirtualPad:
+    """A plugged-in virtual Xbox-like pad: 6 axes, 11 buttons."""
+
+    GAMECONTROLLER = 1  # SDL_JOYSTICK_TYPE_GAMECONTROLLER
+
+    def __init__(self, sdl: ctypes.CDLL) -> None:
+        self._sdl = sdl
+        self.index = sdl.SDL_JoystickAttachVirtual(self.GAMECONTROLLER, 6, 11, 0)
+        assert self.index >= 0, "SDL_JoystickAttachVirtual failed"
+        self._handle = sdl.SDL_JoystickOpen(self.index)
+        assert self._handle, "SDL_JoystickOpen failed"
+        for axis in range(6):
+            self.axis(axis, 0.0)
+
+    def axis(self, axis: int, value: float) -> None:
+        raw = max(-32768, min(32767, round(value * 32767)))
+        assert self._sdl.SDL_JoystickSetVirtualAxis(self._handle, axis, raw) == 0
+
+    def button(self, button: int, down: bool) -> None:
+        assert self._sdl.SDL_JoystickSetVirtualButton(self._handle, button, int(down)) == 0
+
+    def unplug(self) -> None:
+        self._sdl.SDL_JoystickClose(self._handle)
+        self._sdl.SDL_JoystickDetachVirtual(self.index)
+
+
+@pytest.fixture
+def reader() -> Iterator[tuple[Gamepad, OperatorCommand, WallClock, list[float]]]:
+    os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+    _sdl()  # skips when there is no pygame/SDL with virtual joysticks
+    op, clock = operator()
+    aborts: list[float] = []
+    pad = Gamepad(load_gamepad_config(MAPPING), op, clock,
+                  on_abort=lambda: aborts.append(clock.now()))
+    pad.start()
+    try:
+        yield pad, op, clock, aborts
+    finally:
+        pad.close()
+
+
+def eventually(check: Callable[[], bool], what: str, timeout: float = 3.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not check():
+        assert time.monotonic() < deadline, f"timed out waiting for {what}"
+        time.sleep(0.02)
+
+
+def test_no_pad_is_harmless(reader) -> None:  # type: ignore[no-untyped-def]
+    pad, op, clock, aborts = reader
+    time.sleep(0.3)
+    snap = op.snapshot(clock.now())
+    assert pad.name is None and snap.source == "none" and not aborts
+
+
+def test_a_plugged_pad_flies_and_unplugging_it_centres_the_sticks(reader) -> None:  # type: ignore[no-untyped-def]
+    pad, op, clock, aborts = reader
+    sdl = _sdl()
+    device = VirtualPad(sdl)
+    try:
+        eventually(lambda: pad.name is not None, "the pad to be picked up")
+        device.axis(4, -1.0)  # right stick up: forward
+        device.axis(0, 0.6)  # left stick right: clockwise
+        eventually(lambda: op.snapshot(clock.now()).demand.forward > 0.99, "forward")
+        snap = op.snapshot(clock.now())
+        assert snap.source == "gamepad" and snap.demand.rotate > 0.5
+        device.button(5, True)  # RB: grow (held a moment, as a finger does)
+        eventually(lambda: op.snapshot(clock.now()).scale_target > 1.0, "scale step")
+        device.button(5, False)
+        time.sleep(0.1)
+        assert op.snapshot(clock.now()).scale_target == pytest.approx(1.05)  # one step
+        device.button(1, True)  # B: abort
+        eventually(lambda: bool(aborts), "abort")
+    finally:
+        device.unplug()
+    eventually(lambda: pad.name is None, "the pad to be gone")
+    snap = op.snapshot(clock.now())
+    assert snap.demand.forward == 0.0 and snap.source == "gamepad unplugged"
+
+    again = VirtualPad(sdl)  # plugged back in: picked up again
+    try:
+        eventually(lambda: pad.name is not None, "the pad to come back")
+        again.axis(3, 1.0)  # right stick right
+        eventually(lambda: op.snapshot(clock.now()).demand.right > 0.99, "right")
+    finally:
+        again.unplug()

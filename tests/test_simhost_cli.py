@@ -1,0 +1,123 @@
+"""``python -m sim`` as a parent process sees it: ready line, lockstep, clock, exits.
+
+The lockstep test plays the GCS's part by hand on a real zenoh session: it
+reads the clock and the truth samples and sends clock acks.
+"""
+
+from __future__ import annotations
+
+import itertools
+import signal
+import subprocess
+import sys
+import time
+import uuid
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from gcs.link import ZenohSettings, keys, open_session
+from gcs.link.clockwire import decode_time, encode_time
+from gcs.simprocess import free_tcp_port
+from gcs.simtruth import SimTruth
+
+ROOT = Path(__file__).resolve().parent.parent
+CONFIG = ROOT / "configs" / "bebop_square.yaml"
+CHUNK = 1.0 / 128.0
+
+
+def sim_command(*args: str) -> list[str]:
+    return [sys.executable, "-m", "sim", *args]
+
+
+def start(*args: str) -> tuple[subprocess.Popen[str], str]:
+    """Start the host and wait for its ready line."""
+    proc = subprocess.Popen(sim_command(*args), cwd=ROOT, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    assert proc.stdout is not None
+    line = proc.stdout.readline().strip()
+    if not line.startswith("sim ready: "):
+        proc.kill()
+        _, err = proc.communicate(timeout=10)
+        pytest.fail(f"no ready line (got {line!r}): {err}")
+    return proc, line
+
+
+def eventually(condition: Callable[[], bool], what: str, timeout_s: float = 5.0) -> None:
+    deadline = time.monotonic() + timeout_s
+    while not condition():
+        assert time.monotonic() < deadline, f"timed out waiting for {what}"
+        time.sleep(0.02)
+
+
+def test_bad_config_is_one_line_and_exit_status_2(tmp_path: Path) -> None:
+    text = CONFIG.read_text().replace("airframes/bebop2.yaml",
+                                      str(ROOT / "configs" / "airframes" / "bebop2.yaml"))
+    bad = tmp_path / "team.yaml"
+    bad.write_text(text.replace("mass: 0.4   ", "mass: -0.4  "))
+    for args, names in ((("--config", str(bad)), "payload.mass"),
+                        (("--config", str(CONFIG), "--listen", "not-an-endpoint"), "listen")):
+        result = subprocess.run(sim_command(*args), cwd=ROOT, capture_output=True, text=True,
+                                timeout=60)
+        assert result.returncode == 2, result.stderr
+        assert result.stdout == ""
+        lines = result.stderr.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("sim: error: "), result.stderr
+        assert names in lines[0]
+
+
+def test_lockstep_host_waits_for_acks_and_stops_cleanly_on_sigint() -> None:
+    fleet = f"simcli-{uuid.uuid4().hex[:8]}"
+    endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
+    proc, ready = start("--config", str(CONFIG), "--listen", endpoint, "--fleet", fleet,
+                        "--lockstep", "--seed", "3")
+    assert ready == (f"sim ready: fleet {fleet}, 4 vehicles, zenoh listen {endpoint}, "
+                     "speed max, lockstep 0.25 s")
+    session = open_session(ZenohSettings(connect=(endpoint,)))
+    clock: list[tuple[float, float]] = []
+    truth: list[SimTruth] = []
+    subs = [session.declare_subscriber(keys.clock(fleet), lambda s: clock.append(
+                (time.monotonic(), decode_time(s.payload.to_bytes())))),
+            session.declare_subscriber(keys.sim(fleet, "truth"), lambda s: truth.append(
+                SimTruth.from_bytes(s.payload.to_bytes())))]
+    try:
+        # Without an ack the host stops one guidance period (0.25 s) in, and keeps
+        # repeating its clock so that a late GCS still learns where it is.
+        eventually(lambda: len(clock) > 0 and clock[-1][0] - clock[0][0] > 0.5,
+                   "clock samples while waiting")
+        assert max(t for _, t in clock) == pytest.approx(0.25)
+        waiting = [t for w, t in clock if w > clock[-1][0] - 0.5]
+        assert len(waiting) >= 3 and set(waiting) == {0.25}
+        ack = session.declare_publisher(keys.clock_ack(fleet))
+        ack.put(b"junk")  # ignored (logged), not fatal
+        ack.put(encode_time(1.0))
+        eventually(lambda: clock[-1][1] == pytest.approx(1.25), "the clock to reach 1.25 s")
+        time.sleep(0.3)
+        assert max(t for _, t in clock) == pytest.approx(1.25)  # and not one chunk further
+        steps = sorted({t for _, t in clock})
+        assert all(b - a == pytest.approx(CHUNK) for a, b in itertools.pairwise(steps))
+        ticks = [s.t for s in truth if 0.25 < s.t <= 1.25]
+        assert len(ticks) == 20  # 20 Hz of sim time
+        ack.undeclare()
+    finally:
+        for sub in subs:
+            sub.undeclare()
+        session.close()
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=10)
+    assert proc.returncode == 0, err
+    assert "sim: stopped at t = 1.250 s" in err
+    assert "ignored clock ack" in err
+
+
+def test_duration_runs_as_fast_as_possible_and_exits_by_itself() -> None:
+    start_wall = time.monotonic()
+    proc, ready = start("--config", str(CONFIG), "--listen",
+                        f"tcp/127.0.0.1:{free_tcp_port()}", "--fleet",
+                        f"simcli-{uuid.uuid4().hex[:8]}", "--speed", "max", "--duration", "3")
+    assert ready.endswith("speed max")
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 0, err
+    assert "sim: stopped at t = 3.000 s" in err
+    assert time.monotonic() - start_wall < 30.0

@@ -1,0 +1,113 @@
+"""The sim host's plain MAVLink UDP ports, as MAVProxy or QGroundControl would use them.
+
+A pymavlink ``mavutil`` connection, exactly as a user script or MAVProxy opens
+it, talks to ``python -m sim --udp``: the vehicles announce themselves to a
+ground-station port (QGC's ``udpin`` way), and one vehicle answers a client
+that connects to its own port (``udpout``).
+"""
+
+from __future__ import annotations
+
+import random
+import socket
+import time
+import uuid
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from pymavlink import mavutil
+
+from gcs.link import SimMode, mavlink
+from gcs.simprocess import SimProcess, SimStartError, free_tcp_port
+
+ROOT = Path(__file__).resolve().parent.parent
+CONFIG = ROOT / "configs" / "bebop_square.yaml"
+GCS_SYSID = 245
+
+
+def free_udp_ports(count: int) -> int:
+    """First of ``count`` consecutive UDP ports on 127.0.0.1 that were free a moment ago."""
+    for _ in range(50):
+        base = random.randrange(20000, 60000)
+        sockets: list[socket.socket] = []
+        try:
+            for port in range(base, base + count):
+                s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+                sockets.append(s)
+                s.bind(("127.0.0.1", port))
+            return base
+        except OSError:
+            continue
+        finally:
+            for s in sockets:
+                s.close()
+    raise RuntimeError("no block of free UDP ports")
+
+
+@pytest.fixture(scope="module")
+def udp_sim() -> Iterator[tuple[int, int]]:
+    """A sim host with UDP ports; yields (vehicle base port, ground-station port)."""
+    for _ in range(3):
+        base, gcs_port = free_udp_ports(4), free_udp_ports(1)
+        try:
+            sim = SimProcess(CONFIG, endpoint=f"tcp/127.0.0.1:{free_tcp_port()}",
+                             extra=("--fleet", f"simudp-{uuid.uuid4().hex[:8]}", "--udp",
+                                    "--udp-base-port", str(base), "--udp-gcs-port",
+                                    str(gcs_port)), ready_timeout=90.0)
+        except SimStartError as exc:
+            if "cannot" not in str(exc):  # a port taken meanwhile: try others
+                raise
+            continue
+        assert f"udp 1=127.0.0.1:{base} 2=127.0.0.1:{base + 1}" in sim.ready_line
+        assert f"-> gcs 127.0.0.1:{gcs_port}" in sim.ready_line
+        try:
+            yield base, gcs_port
+        finally:
+            sim.close()
+        return
+    pytest.fail("no free ports for the UDP sim")
+
+
+def test_vehicles_announce_themselves_to_the_ground_station_port(
+        udp_sim: tuple[int, int]) -> None:
+    _, gcs_port = udp_sim
+    conn = mavutil.mavlink_connection(f"udpin:127.0.0.1:{gcs_port}",
+                                      source_system=GCS_SYSID, source_component=190)
+    try:
+        seen: set[int] = set()
+        deadline = time.monotonic() + 5.0
+        while seen != {1, 2, 3, 4} and time.monotonic() < deadline:
+            msg = conn.recv_match(type="HEARTBEAT", blocking=True, timeout=0.5)
+            if msg is not None:
+                assert msg.autopilot == mavlink.MAV_AUTOPILOT_GENERIC
+                seen.add(msg.get_srcSystem())
+        assert seen == {1, 2, 3, 4}
+    finally:
+        conn.close()
+
+
+def test_a_client_on_a_vehicle_port_gets_heartbeats_and_command_acks(
+        udp_sim: tuple[int, int]) -> None:
+    base, _ = udp_sim
+    conn = mavutil.mavlink_connection(f"udpout:127.0.0.1:{base + 1}",  # vehicle 2
+                                      source_system=GCS_SYSID, source_component=190)
+    try:
+        deadline = time.monotonic() + 5.0
+        heartbeat = None
+        while heartbeat is None and time.monotonic() < deadline:
+            conn.mav.heartbeat_send(mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+            heartbeat = conn.recv_match(type="HEARTBEAT", blocking=True, timeout=0.5)
+        assert heartbeat is not None, "no HEARTBEAT from the vehicle's UDP port"
+        assert heartbeat.get_srcSystem() == 2 and heartbeat.custom_mode == SimMode.IDLE
+        conn.mav.command_long_send(2, 1, mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 0,
+                                   1, 0, 0, 0, 0, 0, 0)
+        ack = conn.recv_match(type="COMMAND_ACK", blocking=True, timeout=3.0)
+        assert ack is not None and ack.get_srcSystem() == 2
+        assert (ack.command, ack.result) == (mavlink.MAV_CMD_COMPONENT_ARM_DISARM,
+                                             mavlink.MAV_RESULT_ACCEPTED)
+        assert ack.target_system == GCS_SYSID
+        armed = conn.recv_match(type="HEARTBEAT", blocking=True, timeout=3.0)
+        assert armed is not None and armed.base_mode & mavlink.MAV_MODE_FLAG_SAFETY_ARMED
+    finally:
+        conn.close()

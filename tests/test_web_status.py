@@ -1,0 +1,147 @@
+"""The status panel and the plots' history, from the loop's own snapshots."""
+
+from __future__ import annotations
+
+import html as html_lib
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gcs.analysis import analyze
+from gcs.config import load_team
+from gcs.fleet import FleetState
+from gcs.guidance import MotionDemand
+from gcs.link.health import LinkHealth
+from gcs.operator import OperatorSnapshot
+from gcs.phases import Phase
+from gcs.runtime import Event, RuntimeSnapshot, TickStats
+from gcs.safety import SafetyEvent, SafetyReason, SafetyVerdict
+from gcs.simtruth import SimTruth
+from web.frame import TeamView
+from web.history import History
+from web.status import UiStats, events_html, rope_pull_estimate, summary_html, vehicles_html
+
+ROOT = Path(__file__).resolve().parents[1]
+TEAM = load_team(ROOT / "configs" / "bebop_square.yaml")
+VIEW = TeamView.from_team(TEAM, analyze(TEAM))
+G = 9.80665
+
+
+def snapshot(t: float = 5.0, *, xy: np.ndarray | None = None, v: np.ndarray | None = None,
+             scale: float = 1.0, source: str = "browser#0", truth: SimTruth | None = None,
+             safety: SafetyVerdict | None = None,
+             events: tuple[Event, ...] = ()) -> RuntimeSnapshot:
+    n = VIEW.n
+    xy = VIEW.desired_xy if xy is None else xy
+    fleet = FleetState(t=t, ids=VIEW.ids, p_ned=np.column_stack((xy, np.full(n, -1.8))),
+                       v_ned=np.zeros((n, 3)) if v is None else v, yaw=np.zeros(n),
+                       tilt=np.array([0.0, 0.1, 0.2, np.nan]), age=np.full(n, 0.05),
+                       heartbeat_age=np.full(n, 0.4), armed=np.array([1, 1, 1, 0], bool),
+                       battery=np.array([90.0, 80.0, 70.0, np.nan]),
+                       modes=("OFFBOARD", "OFFBOARD", "HOLD", "IDLE"))
+    demand = MotionDemand(forward=0.5, right=-0.25, rotate=0.0, scale=scale)
+    op = OperatorSnapshot(demand=demand, altitude=1.5, altitude_target=1.8,
+                          scale_target=scale, guidance_on=True, source=source)
+    return RuntimeSnapshot(fleet=fleet, phase=Phase.FORMATION, operator=op, demand=demand,
+                           accel_cmd=np.zeros((n, 2)), distance_errors=np.zeros(len(VIEW.edges)),
+                           safety=safety or SafetyVerdict(freeze=False, land=False, events=()),
+                           compute_time=0.001, events=events, truth=truth)
+
+
+def test_rope_pull_from_tilt() -> None:
+    tilt = np.array([0.0, 0.3, 0.3, np.nan])
+    accel = np.array([[0.0, 0.0], [0.0, 0.0], [G * math.tan(0.3), 0.0], [0.0, 0.0]])
+    pull = rope_pull_estimate(0.4, tilt, accel)
+    assert pull[0] == 0.0
+    assert pull[1] == pytest.approx(0.4 * G * math.tan(0.3))
+    assert pull[2] == pytest.approx(0.0, abs=1e-12)  # the command explains the tilt
+    assert math.isnan(pull[3])
+
+
+def test_summary_shows_phase_command_control_payload_and_timing() -> None:
+    truth = SimTruth(t=5.0, ids=VIEW.ids, vehicle_p_ned=((0.0, 0.0, 0.0),) * 4,
+                     payload_p_ned=(0.1, 0.2, -0.75), payload_v_ned=(0.3, 0.4, 0.0),
+                     rope_tension=(1.2,) * 4)
+    html = summary_html(snapshot(source="<b>evil</b>", truth=truth),
+                        loop=TickStats(ticks=40, compute_last=0.001, compute_p99=0.002,
+                                       jitter_p99=0.004, overruns=1),
+                        control="viewer #2", ui=UiStats(rate_hz=25.0, draw_ms=1.2,
+                                                       draw_p99_ms=2.5))
+    assert re.search(r'data-gcs="phase"[^>]*>formation<', html)
+    op = re.search(r'data-gcs="operator">([^<]*)<', html).group(1)  # type: ignore[union-attr]
+    assert "fwd +0.50" in op and "right -0.25" in op and "alt 1.50 → 1.80 m" in op
+    assert "&lt;b&gt;evil&lt;/b&gt;" in op  # a source name is text, never markup
+    assert 'data-gcs="control">viewer #2<' in html
+    assert "0.75 m up at (0.10, 0.20) m, speed 0.50 m/s" in html
+    assert 'data-gcs="ui-rate">25.0<' in html and "overruns 1" in html
+    assert "waiting" in summary_html(None, loop=None, control="", ui=None)
+    grounded = SimTruth(t=5.0, ids=VIEW.ids, vehicle_p_ned=((0.0, 0.0, 0.0),) * 4,
+                        payload_p_ned=(-0.001, 0.0, 0.0002), payload_v_ned=(0.0, 0.0, 0.0),
+                        rope_tension=(0.0,) * 4)
+    assert "0.00 m up at (0.00, 0.00) m" in summary_html(snapshot(truth=grounded), loop=None,
+                                                         control="", ui=None)
+
+
+def test_summary_shows_a_frozen_or_landing_team() -> None:
+    event = SafetyEvent(SafetyReason.STALE, 2, "vehicle 2: stale")
+    frozen = SafetyVerdict(freeze=True, land=False, events=(event,))
+    assert "motion frozen" in summary_html(snapshot(safety=frozen), loop=None, control="",
+                                           ui=None)
+    landing = SafetyVerdict(freeze=True, land=True, events=(event,))
+    assert "landing the team" in summary_html(snapshot(safety=landing), loop=None,
+                                              control="", ui=None)
+
+
+def test_vehicle_rows_show_state_mode_battery_tilt_rope_and_link() -> None:
+    health = {1: LinkHealth(sysid=1, heartbeat_age_s=0.4, alive=True, frames_received=100,
+                            frames_sent=50, packets_lost=3, refused_bad_crc=1,
+                            refused_signature=0, refused_wrong_system=1, foreign_systems=(),
+                            garbage_bytes=0, truncated=0, rtt_s=0.012)}
+    html = vehicles_html(snapshot(), health=health, truth=None, mass=0.4, stale_after=0.5)
+    rows = dict(re.findall(r'data-gcs="vehicle-(\d)">(.*?)</tr>', html))
+    cells = [html_lib.unescape(re.sub("<[^>]+>", "", c)).strip()
+             for c in re.findall(r"<td[^>]*>(.*?)</td>", rows["1"])]
+    assert cells[:8] == ["1", "● ok", "OFFBOARD", "yes", "90", "0.0", "1.80", "0.00"]
+    assert cells[8:] == ["0.4", "3", "2", "12"]
+    assert "holding" in rows["3"] and "HOLD" in rows["3"]
+    four = [re.sub("<[^>]+>", "", c).strip() for c in re.findall(r"<td[^>]*>(.*?)</td>",
+                                                                  rows["4"])]
+    assert four[3:6] == ["no", "–", "–"] and four[8:] == ["–"] * 4  # unknown, no link data
+    assert "rope pull ≈ N" in html
+    truth = SimTruth(t=5.0, ids=(4, 3, 2, 1), vehicle_p_ned=((0.0, 0.0, 0.0),) * 4,
+                     payload_p_ned=(0.0, 0.0, -0.7), payload_v_ned=(0.0, 0.0, 0.0),
+                     rope_tension=(4.0, 3.0, 2.0, 1.25))
+    measured = vehicles_html(snapshot(), health={}, truth=truth, mass=0.4, stale_after=0.5)
+    assert "rope N (sim)" in measured
+    assert re.search(r'vehicle-1">(?:<td[^>]*>.*?</td>){7}<td[^>]*>1.25<', measured)
+
+
+def test_events_newest_first_escaped_and_coloured() -> None:
+    events = tuple(Event(t=float(k), level=lvl, text=txt) for k, (lvl, txt) in enumerate(
+        [("info", "phase: hover"), ("warning", "vehicle 2: <stale>"), ("error", "oops")]))
+    html = events_html(snapshot(events=events))
+    assert html.index("oops") < html.index("&lt;stale&gt;") < html.index("phase: hover")
+    assert "#c0392b" in html and "#e67e22" in html
+    assert "no events" in events_html(snapshot())
+    assert "phase: hover" not in events_html(snapshot(events=events), limit=2)
+
+
+def test_history_keeps_a_window_of_distances_and_velocities() -> None:
+    history = History(VIEW, window=10.0)
+    for k in range(60):
+        t = 0.25 * k
+        v = np.tile([0.1 * k, -0.05 * k, 0.0], (4, 1))
+        assert history.add(snapshot(t, xy=1.1 * VIEW.desired_xy, v=v, scale=1.1))
+    assert not history.add(snapshot(14.75))  # the same tick again
+    assert not history.add(snapshot(20.0, xy=np.full((4, 2), np.nan)))  # team not known
+    s = history.series()
+    assert s.t[0] >= 14.75 - 10.0 and s.t[-1] == 14.75 and len(history) == len(s.t) == 41
+    np.testing.assert_allclose(s.distance, 1.1 * np.tile(VIEW.distances, (41, 1)))
+    np.testing.assert_allclose(s.desired, s.distance)
+    np.testing.assert_allclose(s.vx[-1], 5.9)
+    np.testing.assert_allclose(s.vy[-1], -2.95)
+    empty = History(VIEW).series()
+    assert empty.distance.shape == (0, len(VIEW.edges)) and empty.vx.shape == (0, 4)

@@ -1,0 +1,151 @@
+"""The scene and the page's server side with a real viser server (no browser).
+
+A plain websocket client stands in for a viewer, so what the server sends
+is really serialised and received.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import numpy as np
+import pytest
+import viser
+from websockets.exceptions import ConnectionClosed
+from websockets.sync.client import connect
+
+from gcs.analysis import analyze
+from gcs.app import GcsApp
+from gcs.config import load_team
+from gcs.fleet import FleetState
+from gcs.link.zenoh_session import ZenohSettings
+from gcs.simprocess import free_tcp_port
+from web.frame import TeamView, build_frame
+from web.quadmesh import quad_mesh
+from web.scene import SceneView
+from web.trails import Trails
+from web.ui import WebUi
+
+ROOT = Path(__file__).resolve().parents[1]
+TEAM = load_team(ROOT / "configs" / "bebop_square.yaml")
+VIEW = TeamView.from_team(TEAM, analyze(TEAM))
+
+
+class Viewer:
+    """A websocket client that counts the bytes the page sends it."""
+
+    def __init__(self, port: int) -> None:
+        self.received = 0
+        self._stop = threading.Event()
+        self._ws = connect(f"ws://127.0.0.1:{port}",
+                           subprotocols=[f"viser-v{viser.__version__}"], max_size=None)
+        self._thread = threading.Thread(target=self._read, daemon=True)
+        self._thread.start()
+
+    def _read(self) -> None:
+        while not self._stop.is_set():
+            try:
+                self.received += len(self._ws.recv(timeout=0.1))
+            except TimeoutError:
+                continue
+            except ConnectionClosed:
+                return
+
+    def settled(self, quiet: float = 0.4) -> int:
+        """Bytes received once nothing more arrived for ``quiet`` seconds."""
+        last = -1
+        while last != self.received:
+            last = self.received
+            time.sleep(quiet)
+        return last
+
+    def close(self) -> None:
+        self._stop.set()
+        self._ws.close()
+        self._thread.join(timeout=2.0)
+
+
+@pytest.fixture
+def server() -> Iterator[viser.ViserServer]:
+    s = viser.ViserServer(host="127.0.0.1", port=free_tcp_port(), verbose=False)
+    try:
+        yield s
+    finally:
+        s.stop()
+
+
+def fleet(t: float, shift: float = 0.0, known: int = 4) -> FleetState:
+    n = VIEW.n
+    p = np.column_stack((VIEW.desired_xy + [shift, 0.0], np.full(n, -1.5)))
+    p[known:] = np.nan
+    return FleetState(t=t, ids=VIEW.ids, p_ned=p, v_ned=np.tile([0.3, 0.0, 0.0], (n, 1)),
+                      yaw=np.full(n, 0.2), tilt=np.zeros(n), age=np.full(n, 0.05),
+                      heartbeat_age=np.full(n, 0.5), armed=np.ones(n, dtype=bool),
+                      battery=np.full(n, 99.0), modes=("OFFBOARD",) * n)
+
+
+def test_the_scene_holds_what_the_frame_says(server: viser.ViserServer) -> None:
+    scene = SceneView(server.scene, VIEW, quad_mesh(0.08, 0.11), geofence_xy=4.0)
+    frame = build_frame(VIEW, fleet(1.0, known=3), scale=1.0, truth=None, trails=Trails(4))
+    with server.atomic():
+        scene.draw(frame)
+    vehicles = server.scene.get_handle_by_name("/team/vehicles")
+    assert vehicles is not None
+    np.testing.assert_allclose(vehicles.batched_positions, frame.p_ned, atol=1e-6)
+    np.testing.assert_allclose(vehicles.batched_scales, [1, 1, 1, 0])
+    labels = [server.scene.get_handle_by_name(f"/team/id_{vid}") for vid in VIEW.ids]
+    assert [label.visible for label in labels] == [True, True, True, False]
+    np.testing.assert_allclose(labels[0].position, frame.label_p[0], atol=1e-6)
+    edges = server.scene.get_handle_by_name("/team/edges")
+    assert edges.visible and edges.points.shape == (3, 2, 3)  # among known vehicles only
+    payload = server.scene.get_handle_by_name("/team/payload")
+    assert payload.visible and payload.color == (240, 190, 140)  # estimated, not measured
+    nobody = build_frame(VIEW, fleet(1.2, known=0), scale=1.0, truth=None, trails=Trails(4))
+    scene.draw(nobody)
+    assert not payload.visible and not edges.visible
+    assert not server.scene.get_handle_by_name("/team/ropes").visible
+
+
+def test_only_what_changed_is_sent(server: viser.ViserServer) -> None:
+    scene = SceneView(server.scene, VIEW, quad_mesh(0.08, 0.11), geofence_xy=4.0)
+    viewer = Viewer(server.get_port())
+    try:
+        trails = Trails(4)
+        first = build_frame(VIEW, fleet(1.0), scale=1.0, truth=None, trails=trails)
+        with server.atomic():
+            scene.draw(first)
+        before = viewer.settled()
+        again = build_frame(VIEW, fleet(1.0), scale=1.0, truth=None, trails=trails)
+        with server.atomic():
+            scene.draw(again)
+        assert viewer.settled() == before  # an unchanged team costs no traffic
+        moved = build_frame(VIEW, fleet(1.05, shift=0.1), scale=1.0, truth=None, trails=trails)
+        with server.atomic():
+            scene.draw(moved)
+        assert viewer.settled() > before
+    finally:
+        viewer.close()
+
+
+def test_the_page_draws_at_its_rate_beside_a_running_loop() -> None:
+    settings = ZenohSettings(mode="peer", connect=())  # no vehicles: the team is unknown
+    with GcsApp(TEAM, zenoh_settings=settings) as app:
+        ui = WebUi(app, port=free_tcp_port(), rate_hz=25.0)
+        viewer = Viewer(ui.server.get_port())
+        try:
+            app.start()
+            ui.start()
+            time.sleep(2.0)
+            stats = ui.stats()
+            assert stats.rate_hz == pytest.approx(25.0, rel=0.1)
+            assert 0.0 < stats.draw_ms < 20.0
+            assert app.runtime.stats().ticks >= 6  # the 4 Hz loop kept its pace
+            assert app.runtime.stats().overruns == 0
+            assert ui.url == f"http://127.0.0.1:{ui.server.get_port()}"
+            assert viewer.received > 0
+        finally:
+            viewer.close()
+            ui.close()

@@ -1,0 +1,238 @@
+"""The MAVLink 2 endpoint of one simulated vehicle: its system id, commands, setpoints, telemetry.
+
+Why: the GCS sees a simulated vehicle only through MAVLink, exactly as it
+would see PX4 or ArduPilot, so every behaviour the GCS relies on (the
+contract in ``gcs/link/README.md``) lives here, between the bytes and the
+:class:`~vehicles.autopilot.Autopilot`:
+
+- a MAVLink 2 system with its own system id, component 1; frames addressed
+  to another system or component are counted and ignored, bad bytes are
+  counted and dropped (the decoder never raises);
+- HEARTBEAT (1 Hz, and at once after every mode change), telemetry at rates
+  set by ``SET_MESSAGE_INTERVAL`` (:mod:`vehicles.streams`), times from sim time;
+- COMMAND_LONG answered by COMMAND_ACK (:mod:`vehicles.commands`), refusals
+  explained by STATUSTEXT;
+- acceleration setpoints checked (:mod:`vehicles.setpoint_check`), each
+  accepted one echoed at once as POSITION_TARGET_LOCAL_NED (PX4's target
+  report), each refused one reported by STATUSTEXT and never flown;
+- TIMESYNC probes answered with the vehicle's clock;
+- optional MAVLink 2 signing: everything sent is signed, unsigned or wrongly
+  signed frames are refused.
+
+The endpoint owns no thread and no socket: the host hands it received bytes
+(:meth:`VehicleEndpoint.receive`) and calls :meth:`VehicleEndpoint.update`
+after each chunk of physics; frames go out through the ``send`` callable.
+Not thread-safe: call it from the host's loop only.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+from gcs.link.decoder import DecodeStats, FrameDecoder
+from gcs.link.dialect import MavMessage
+from gcs.link.encoder import MavlinkEncoder
+from gcs.link.setpoints import SetpointKind
+from gcs.link.signing import SigningKey
+from gcs.link.telemetry import Severity
+from vehicles.autopilot import Autopilot
+from vehicles.battery import Battery
+from vehicles.commands import MavResult, execute_command
+from vehicles.modes import Mode
+from vehicles.reports import CommCounters, VehicleView, build_report, time_boot_ms
+from vehicles.setpoint_check import Refusal, SetpointLimits, check_setpoint
+from vehicles.state import Measurements
+from vehicles.streams import DEFAULT_RATES_HZ, StreamSchedule, TelemetryMessage
+
+__all__ = ["COMPONENT_ID", "EndpointCounters", "VehicleEndpoint"]
+
+COMPONENT_ID = 1
+"""Component id of the simulated autopilot (``MAV_COMP_ID_AUTOPILOT1``)."""
+
+_STATUSTEXT_LEN = 50
+_REFUSAL_REPORT_PERIOD = 1.0
+"""At most one STATUSTEXT per refusal reason per this much sim time, s (all are counted)."""
+
+
+@dataclass(frozen=True)
+class EndpointCounters:
+    """What the endpoint has seen since it started (a snapshot)."""
+
+    decode: DecodeStats
+    """The decoder's counters: frames, garbage bytes, bad checksums, truncated frames..."""
+    not_for_us: int
+    """Frames addressed to another system id or component, ignored."""
+    commands: int
+    """COMMAND_LONG answered."""
+    setpoints_accepted: int
+    setpoints_refused: int
+
+
+class VehicleEndpoint:
+    """MAVLink 2 system ``sysid`` for vehicle ``index`` of ``autopilot``.
+
+    Arguments (keyword-only after ``index``):
+        sysid: the vehicle's MAVLink system id, 1..255.
+        measurements: the world's live sensor arrays (HIGHRES_IMU reads them).
+        send: called with each outgoing frame (bytes); must not block.
+        signing_key: sign everything and refuse unsigned frames (None: unsigned).
+        battery: the vehicle's battery (default: a full Bebop 2 pack).
+        rates_hz: initial telemetry rates, Hz of sim time.
+        limits: setpoint input limits.
+        wall_clock: time source for signature timestamps, s since the epoch.
+    """
+
+    def __init__(self, autopilot: Autopilot, index: int, *, sysid: int,
+                 measurements: Measurements, send: Callable[[bytes], None],
+                 signing_key: SigningKey | None = None, battery: Battery | None = None,
+                 rates_hz: Mapping[TelemetryMessage, float] = DEFAULT_RATES_HZ,
+                 limits: SetpointLimits | None = None,
+                 wall_clock: Callable[[], float] = time.time) -> None:
+        if not 0 <= index < autopilot.n_vehicles:
+            raise IndexError(f"vehicle index {index} outside 0..{autopilot.n_vehicles - 1}")
+        self._autopilot = autopilot
+        self._index = index
+        self._measurements = measurements
+        self._send = send
+        self._encoder = MavlinkEncoder(system_id=sysid, component_id=COMPONENT_ID,
+                                       signing_key=signing_key, wall_clock=wall_clock)
+        self._decoder = FrameDecoder(datagram=True, signing_key=signing_key,
+                                     wall_clock=wall_clock)
+        self._battery = battery if battery is not None else Battery()
+        self._streams = StreamSchedule(rates_hz)
+        self._limits = limits if limits is not None else SetpointLimits()
+        self._reported_mode: Mode | None = None
+        self._last_update: float | None = None
+        self._refusal_reported: dict[Refusal, float] = {}
+        self._statustext_id = 0
+        self._not_for_us = 0
+        self._commands = 0
+        self._accepted = 0
+        self._refused = 0
+        self._handlers: dict[str, Callable[[MavMessage, float], None]] = {
+            "COMMAND_LONG": self._command_long,
+            "SET_POSITION_TARGET_LOCAL_NED": self._setpoint,
+            "TIMESYNC": self._timesync,
+        }
+
+    @property
+    def sysid(self) -> int:
+        """The vehicle's MAVLink system id."""
+        return self._encoder.system_id
+
+    @property
+    def index(self) -> int:
+        """The vehicle's index in the autopilot's arrays."""
+        return self._index
+
+    @property
+    def streams(self) -> StreamSchedule:
+        """Telemetry rates in force."""
+        return self._streams
+
+    def counters(self) -> EndpointCounters:
+        """Snapshot of the counters."""
+        return EndpointCounters(self._decoder.stats(), self._not_for_us, self._commands,
+                                self._accepted, self._refused)
+
+    # -- inbound --------------------------------------------------------------------------------
+
+    def receive(self, data: bytes, t: float) -> None:
+        """Act on the frames in ``data`` (one datagram or zenoh payload) at sim time ``t``."""
+        for msg in self._decoder.feed(data):
+            handler = self._handlers.get(msg.get_type())
+            if handler is None:
+                continue
+            if not self._addressed_to_me(msg):
+                self._not_for_us += 1
+                continue
+            handler(msg, t)
+
+    def _addressed_to_me(self, msg: MavMessage) -> bool:
+        target = getattr(msg, "target_system", 0)
+        component = getattr(msg, "target_component", 0)
+        return target in (0, self.sysid) and component in (0, COMPONENT_ID)
+
+    def _command_long(self, msg: MavMessage, t: float) -> None:
+        self._commands += 1
+        outcome = execute_command(msg, self._autopilot, self._index, self._streams, t)
+        self._emit(self._encoder.mav.command_ack_encode(
+            msg.command, int(outcome.result), 0, 0, msg.get_srcSystem(), msg.get_srcComponent()))
+        if outcome.result is not MavResult.ACCEPTED and outcome.reason:
+            self._status_text(Severity.WARNING, outcome.reason)
+        self._heartbeat_if_mode_changed(t)
+
+    def _setpoint(self, msg: MavMessage, t: float) -> None:
+        verdict = check_setpoint(msg, self._limits)
+        setpoint = verdict.setpoint
+        if setpoint is None:
+            self._refused += 1
+            assert verdict.refusal is not None
+            last = self._refusal_reported.get(verdict.refusal)
+            if last is None or t - last >= _REFUSAL_REPORT_PERIOD:
+                self._refusal_reported[verdict.refusal] = t
+                self._status_text(Severity.WARNING, verdict.text)
+            return
+        if setpoint.kind is SetpointKind.ACCEL:
+            self._autopilot.set_accel_setpoint(self._index, setpoint.accel_ned)
+        else:
+            assert setpoint.z_ned is not None
+            self._autopilot.set_accel_xy_pos_z_setpoint(self._index, setpoint.accel_ned[:2],
+                                                        setpoint.z_ned)
+        self._accepted += 1
+        self._emit(self._encoder.mav.position_target_local_ned_encode(
+            time_boot_ms(t), msg.coordinate_frame, msg.type_mask, msg.x, msg.y, msg.z, msg.vx,
+            msg.vy, msg.vz, msg.afx, msg.afy, msg.afz, msg.yaw, msg.yaw_rate))
+
+    def _timesync(self, msg: MavMessage, t: float) -> None:
+        if msg.tc1 == 0:  # a probe; non-zero tc1 is someone's answer, not for us
+            self._emit(self._encoder.mav.timesync_encode(int(t * 1e9), msg.ts1))
+
+    # -- outbound -------------------------------------------------------------------------------
+
+    def update(self, t: float) -> None:
+        """After physics reached sim time ``t``: drain the battery, send what is due."""
+        if self._last_update is not None:
+            kf = self._autopilot.airframe.thrust_coefficient
+            rotor_speed = self._autopilot.state.rotor_speed_model[self._index].tolist()
+            self._battery.draw([kf * w * w for w in rotor_speed], t - self._last_update)
+        self._last_update = t
+        self._heartbeat_if_mode_changed(t)
+        due = list(self._streams.due(t))
+        if due:
+            view = self._view(t)
+            for message in due:
+                self._emit(build_report(self._encoder.mav, message, view))
+
+    def _heartbeat_if_mode_changed(self, t: float) -> None:
+        mode = self._autopilot.mode(self._index)
+        if mode is self._reported_mode:
+            return
+        self._reported_mode = mode
+        self._emit(build_report(self._encoder.mav, TelemetryMessage.HEARTBEAT, self._view(t)))
+        self._streams.sent(TelemetryMessage.HEARTBEAT, t)
+
+    def _view(self, t: float) -> VehicleView:
+        stats = self._decoder.stats()
+        comm = CommCounters(frames=stats.frames, dropped=stats.dropped,
+                            not_for_us=self._not_for_us, garbage_bytes=stats.garbage_bytes,
+                            setpoints_refused=self._refused)
+        return VehicleView(self._autopilot, self._index, self._measurements,
+                           self._battery.reading(), comm, t)
+
+    def _status_text(self, severity: Severity, text: str) -> None:
+        """STATUSTEXT, split into MAVLink 2 chunks (same id, rising chunk_seq) when long."""
+        data = text.encode("utf-8")
+        if len(data) <= _STATUSTEXT_LEN:
+            self._emit(self._encoder.mav.statustext_encode(int(severity), data))
+            return
+        self._statustext_id = self._statustext_id % 0xFFFF + 1
+        # A final chunk shorter than 50 bytes (possibly empty) tells receivers the text ended.
+        for seq, start in enumerate(range(0, len(data) + 1, _STATUSTEXT_LEN)):
+            self._emit(self._encoder.mav.statustext_encode(
+                int(severity), data[start:start + _STATUSTEXT_LEN], self._statustext_id, seq))
+
+    def _emit(self, msg: MavMessage) -> None:
+        self._send(self._encoder.encode(msg))

@@ -1,0 +1,221 @@
+"""The page's input script: hotkeys and virtual sticks that viser lacks.
+
+viser 1.1.1 offers command hotkeys (key-down only, letters/digits/a few
+specials: no ``+``/``-``, no key-up, so no "hold W to fly forward") and
+buttons with ``on_hold``, but no joystick. This script adds both:
+
+* hotkeys (:data:`web.browser_input.HOTKEYS`) tracked down *and* up, ignored
+  while typing in a field or with Ctrl/Alt/Cmd held; released on window blur;
+* two virtual sticks drawn by :data:`PADS_HTML` (a round pad for translation,
+  a bar for rotation) that follow the pointer and spring back to the centre
+  on release.
+
+It reports through the holder's read-only "browser input" text field, whose
+input it sets the way a user's typing would (native value setter plus an
+``input`` event), so the line travels over viser's own websocket as an
+ordinary GUI update that the server attributes to that client. A viewer
+without control has no such field: the script then leaves the keys alone (W/A/S/D/Q/E
+move viser's camera as usual) and the pads do nothing.
+
+The script is shipped with viser's ``RunJavascriptMessage``, the mechanism
+``GuiApi.add_plotly`` uses to load plotly.js; viser 1.1.1 has no public call
+for it, hence the one private import below. It is kept in the server's
+persistent messages, so viewers connecting later get it too.
+"""
+
+from __future__ import annotations
+
+import json
+
+import viser
+from viser import _messages as viser_messages
+
+from web.browser_input import HOTKEYS, INPUT_TIMEOUT, STEP_ACTIONS
+
+__all__ = ["CHANNEL_LABEL", "SEND_PERIOD_MS", "install_script", "pads_html", "script_source"]
+
+CHANNEL_LABEL = "browser input"
+"""Label of the text field the script writes to (matched exactly by the script)."""
+
+SEND_PERIOD_MS = 100
+"""At most one line per this period; repeated at this period while anything is held."""
+
+_SCRIPT = r"""
+(() => {
+  const CFG = __CONFIG__;
+  if (window.__gcsInput) return;
+  const st = {held: new Set(), steps: {}, pad: [0, 0], rot: 0, seq: 0, sentAt: 0,
+              changedAt: 0, timer: null, drag: null};
+  window.__gcsInput = st;
+  const setValue = Object.getOwnPropertyDescriptor(HTMLInputElement.prototype, "value").set;
+
+  function channel() {
+    for (const label of document.querySelectorAll("label")) {
+      if (label.textContent !== CFG.channel) continue;
+      let box = label.parentElement;
+      while (box && !box.querySelector("input")) box = box.parentElement;
+      return box ? box.querySelector("input") : null;
+    }
+    return null;
+  }
+  const num = (x) => (Math.round(x * 100) / 100).toFixed(2);
+  function line() {
+    const steps = Object.keys(st.steps).sort().map((k) => k + ":" + st.steps[k]).join(",");
+    return "#" + st.seq + " keys=" + [...st.held].sort().join(",") + " steps=" + steps +
+      " pad=" + num(st.pad[0]) + "," + num(st.pad[1]) + " rot=" + num(st.rot);
+  }
+  function flush() {
+    st.timer = null;
+    const input = channel();
+    if (!input) return;
+    st.seq += 1;
+    st.sentAt = Date.now();
+    setValue.call(input, line());
+    input.dispatchEvent(new Event("input", {bubbles: true}));
+  }
+  function schedule() {
+    if (st.timer !== null) return;
+    st.timer = setTimeout(flush, Math.max(0, st.sentAt + CFG.period - Date.now()));
+  }
+  function changed() {
+    st.changedAt = Date.now();
+    schedule();
+  }
+  setInterval(() => {
+    const active = st.held.size > 0 || st.pad[0] !== 0 || st.pad[1] !== 0 || st.rot !== 0;
+    if (active || Date.now() - st.changedAt < CFG.linger) schedule();
+  }, CFG.period);
+
+  const editable = (t) => t && (t.isContentEditable || /^(INPUT|TEXTAREA|SELECT)$/.test(t.tagName));
+  const keyName = (e) => (e.key.length === 1 ? e.key.toLowerCase() : e.key);
+  window.addEventListener("keydown", (e) => {
+    if (editable(e.target) || e.ctrlKey || e.metaKey || e.altKey) return;
+    const action = CFG.keys[keyName(e)];
+    if (!action || !channel()) return;
+    e.preventDefault();
+    e.stopPropagation();
+    if (e.repeat) return;
+    if (CFG.steps.includes(action)) {
+      st.steps[action] = (st.steps[action] || 0) + 1;
+      changed();
+    } else if (!st.held.has(action)) {
+      st.held.add(action);
+      changed();
+    }
+  }, true);
+  window.addEventListener("keyup", (e) => {
+    const action = CFG.keys[keyName(e)];
+    if (action && st.held.delete(action)) {
+      e.stopPropagation();
+      changed();
+    }
+  }, true);
+
+  function knob(pad, x, y) {
+    const k = pad.querySelector("[data-gcs-knob]");
+    const r = pad.getBoundingClientRect();
+    const kr = k.getBoundingClientRect();
+    k.style.transform = "translate(" + x * (r.width - kr.width) / 2 + "px," +
+      y * (r.height - kr.height) / 2 + "px)";
+  }
+  function centre(pad) {
+    knob(pad, 0, 0);
+    if (pad.dataset.gcsPad === "move") st.pad = [0, 0]; else st.rot = 0;
+    changed();
+  }
+  function follow(e) {
+    const pad = st.drag.pad;
+    const r = pad.getBoundingClientRect();
+    let x = (e.clientX - r.left - r.width / 2) / (r.width / 2);
+    let y = (e.clientY - r.top - r.height / 2) / (r.height / 2);
+    if (pad.dataset.gcsPad === "move") {
+      const n = Math.hypot(x, y);
+      if (n > 1) { x /= n; y /= n; }
+      st.pad = [-y, x];
+      knob(pad, x, y);
+    } else {
+      x = Math.max(-1, Math.min(1, x));
+      st.rot = x;
+      knob(pad, x, 0);
+    }
+    changed();
+  }
+  document.addEventListener("pointerdown", (e) => {
+    const pad = e.target.closest ? e.target.closest("[data-gcs-pad]") : null;
+    if (!pad || pad.closest("[data-gcs-off]") || !channel()) return;
+    e.preventDefault();
+    try { pad.setPointerCapture(e.pointerId); } catch (err) { /* pointer already gone */ }
+    st.drag = {pad: pad, id: e.pointerId};
+    follow(e);
+  }, true);
+  document.addEventListener("pointermove", (e) => {
+    if (st.drag && e.pointerId === st.drag.id) follow(e);
+  }, true);
+  function release(e) {
+    if (!st.drag || e.pointerId !== st.drag.id) return;
+    const pad = st.drag.pad;
+    st.drag = null;
+    centre(pad);
+  }
+  for (const type of ["pointerup", "pointercancel", "lostpointercapture"]) {
+    document.addEventListener(type, release, true);
+  }
+  function letGo() {
+    st.held.clear();
+    if (st.drag) { const pad = st.drag.pad; st.drag = null; centre(pad); }
+    st.pad = [0, 0];
+    st.rot = 0;
+    changed();
+  }
+  window.addEventListener("blur", letGo);
+  document.addEventListener("visibilitychange", () => { if (document.hidden) letGo(); });
+})();
+"""
+
+_PAD = ("position:relative;flex:none;touch-action:none;user-select:none;cursor:grab;"
+        "background:#eef2f5;border:2px solid #90a4ae;box-sizing:border-box;")
+_KNOB = ("position:absolute;left:50%;top:50%;width:34px;height:34px;margin:-17px 0 0 -17px;"
+         "border-radius:50%;background:#37474f;pointer-events:none;")
+_MARK = "position:absolute;font:11px sans-serif;color:#607d8b;pointer-events:none;"
+
+
+def pads_html(*, enabled: bool) -> str:
+    """The two virtual sticks; greyed out and inert when ``enabled`` is False."""
+    off = "" if enabled else ' data-gcs-off="1" style="opacity:0.35;filter:grayscale(1)"'
+    return (
+        f'<div{off}><div style="display:flex;gap:14px;align-items:center;'
+        f'justify-content:center;padding:2px 0 8px 0">'
+        f'<div data-gcs-pad="move" title="translate: drag (forward up)" '
+        f'style="{_PAD}width:124px;height:124px;border-radius:50%">'
+        f'<span style="{_MARK}left:50%;top:2px;transform:translateX(-50%)">fwd</span>'
+        f'<span style="{_MARK}left:50%;bottom:2px;transform:translateX(-50%)">back</span>'
+        f'<span style="{_MARK}left:4px;top:50%;transform:translateY(-50%)">L</span>'
+        f'<span style="{_MARK}right:4px;top:50%;transform:translateY(-50%)">R</span>'
+        f'<div data-gcs-knob style="{_KNOB}"></div></div>'
+        f'<div style="display:flex;flex-direction:column;align-items:center;gap:4px">'
+        f'<div data-gcs-pad="turn" title="rotate: drag (right is clockwise)" '
+        f'style="{_PAD}width:124px;height:40px;border-radius:20px">'
+        f'<span style="{_MARK}left:6px;top:50%;transform:translateY(-50%)">&#8634;</span>'
+        f'<span style="{_MARK}right:6px;top:50%;transform:translateY(-50%)">&#8635;</span>'
+        f'<div data-gcs-knob style="{_KNOB}"></div></div>'
+        f'<span style="font:11px sans-serif;color:#607d8b">rotate</span></div>'
+        f'</div></div>'
+    )
+
+
+def script_source() -> str:
+    """The script with its configuration (keys, actions, timing) filled in."""
+    config = {
+        "channel": CHANNEL_LABEL,
+        "keys": dict(HOTKEYS),
+        "steps": list(STEP_ACTIONS),
+        "period": SEND_PERIOD_MS,
+        "linger": int(INPUT_TIMEOUT * 1000),
+    }
+    return _SCRIPT.replace("__CONFIG__", json.dumps(config))
+
+
+def install_script(server: viser.ViserServer) -> None:
+    """Run the input script in every present and future viewer of ``server``."""
+    server.gui._websock_interface.queue_message(  # no public API in viser 1.1.1
+        viser_messages.RunJavascriptMessage(source=script_source()))

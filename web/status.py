@@ -1,0 +1,157 @@
+"""The status panel as HTML: flight phase, operator command, vehicles, links, events.
+
+Plain functions from the loop's snapshot (and the link health) to HTML strings,
+so what the operator reads can be tested without a browser. Elements carry
+``data-gcs`` attributes naming what they show, for tests and for scripts.
+"""
+
+from __future__ import annotations
+
+import html
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from gcs.link.health import LinkHealth
+from gcs.runtime import RuntimeSnapshot, TickStats
+from gcs.simtruth import SimTruth
+from web.frame import vehicle_states
+from web.palette import VehicleState, state_colors
+
+__all__ = ["UiStats", "events_html", "rope_pull_estimate", "summary_html", "vehicles_html"]
+
+_LEVEL_COLOR = {"info": "#455a64", "warning": "#e67e22", "error": "#c0392b"}
+_CELL = "padding:1px 5px;text-align:right;white-space:nowrap"
+
+
+@dataclass(frozen=True)
+class UiStats:
+    """How the UI keeps up: frames per second and the server-side cost of a frame."""
+
+    rate_hz: float
+    draw_ms: float  # median over the recent frames
+    draw_p99_ms: float
+
+
+def rope_pull_estimate(mass: float, tilt: np.ndarray, accel_cmd: np.ndarray,
+                       gravity: float = 9.80665) -> np.ndarray:
+    """Horizontal rope pull per vehicle from its tilt, N (quasi-static, a lower bound).
+
+    A vehicle that holds its altitude and tilts by ``tilt`` pushes sideways with
+    about ``m g tan(tilt)``; what its commanded acceleration does not explain is
+    the rope pulling it. Ignoring the rope's vertical load makes this a lower
+    bound; it is only meaningful in steady flight.
+    """
+    side = mass * (gravity * np.tan(np.nan_to_num(tilt)) -
+                   np.linalg.norm(np.nan_to_num(accel_cmd), axis=1))
+    return np.where(np.isfinite(tilt), np.maximum(side, 0.0), np.nan)
+
+
+def _num(x: float, fmt: str, unit: str = "") -> str:
+    """``x`` formatted, "–" when unknown; never "-0.00" for a value that rounds to zero."""
+    if x is None or not math.isfinite(x):
+        return "–"
+    text = f"{x:{fmt}}"
+    if text.startswith("-") and float(text) == 0.0:
+        text = text[1:]
+    return f"{text}{unit}"
+
+
+def _payload_text(truth: SimTruth | None) -> str:
+    if truth is None:
+        return "not measured (drawn where taut ropes would hold it)"
+    x, y, z = truth.payload_p_ned
+    return (f"{_num(-z, '.2f')} m up at ({_num(x, '.2f')}, {_num(y, '.2f')}) m, speed "
+            f"{math.hypot(*truth.payload_v_ned):.2f} m/s (simulator)")
+
+
+def summary_html(snap: RuntimeSnapshot | None, *, loop: TickStats | None, control: str,
+                 ui: UiStats | None) -> str:
+    """Phase, operator command, control holder, payload, safety verdict and loop timing."""
+    if snap is None:
+        return '<div style="padding:4px 8px">waiting for the first guidance tick…</div>'
+    op = snap.operator
+    d = op.demand
+    command = (f"fwd {d.forward:+.2f} · right {d.right:+.2f} · rot {d.rotate:+.2f} · "
+               f"scale {d.scale:.2f} → {op.scale_target:.2f} · "
+               f"alt {op.altitude:.2f} → {op.altitude_target:.2f} m · "
+               f"guidance {'on' if op.guidance_on else 'off'} · from {html.escape(op.source)}")
+    verdict = snap.safety
+    if verdict.land:
+        safety = '<b style="color:#c0392b">landing the team</b>'
+    elif verdict.freeze:
+        safety = '<b style="color:#e67e22">motion frozen</b>'
+    else:
+        safety = '<span style="color:#27ae60">ok</span>'
+    timing = "" if loop is None else (
+        f"loop {loop.ticks} ticks · compute p99 {1e3 * loop.compute_p99:.1f} ms · "
+        f"jitter p99 {1e3 * loop.jitter_p99:.0f} ms · overruns {loop.overruns}")
+    ui_text = "" if ui is None else (f' · UI <span data-gcs="ui-rate">{ui.rate_hz:.1f}</span> Hz, '
+                                     f"frame {ui.draw_ms:.2f} ms (p99 {ui.draw_p99_ms:.2f})")
+    worst = np.nanmax(np.abs(snap.distance_errors)) if np.isfinite(snap.distance_errors).any() \
+        else math.nan
+    return (
+        '<div style="padding:2px 8px;font-size:0.85em;line-height:1.5">'
+        f'<div>phase <b data-gcs="phase" style="font-size:1.2em">{snap.phase.text}</b>'
+        f' · safety {safety} · worst distance error '
+        f'<span data-gcs="worst-error">{_num(worst, ".3f", " m")}</span></div>'
+        f'<div>command <span data-gcs="operator">{command}</span></div>'
+        f'<div>control <span data-gcs="control">{html.escape(control)}</span></div>'
+        f'<div>payload <span data-gcs="payload">{_payload_text(snap.truth)}</span></div>'
+        f'<div style="color:#78909c">{timing}{ui_text}</div>'
+        '</div>')
+
+
+def vehicles_html(snap: RuntimeSnapshot | None, *, health: Mapping[int, LinkHealth],
+                  truth: SimTruth | None, mass: float, stale_after: float) -> str:
+    """One row per vehicle: state, mode, armed, battery, tilt, rope, link health."""
+    if snap is None:
+        return ""
+    f = snap.fleet
+    states = vehicle_states(f, stale_after)
+    colors = state_colors(states)
+    pull = rope_pull_estimate(mass, f.tilt, snap.accel_cmd)
+    measured = truth is not None and set(truth.ids) >= set(f.ids)
+    rope_head = "rope N (sim)" if measured else "rope pull ≈ N"
+    head = ("id", "state", "mode", "armed", "batt %", "tilt °", "alt m", rope_head, "hb s",
+            "lost", "refused", "rtt ms")
+    rows = []
+    for i, vid in enumerate(f.ids):
+        h = health.get(vid)
+        rope = truth.rope_tension[truth.ids.index(vid)] if measured and truth else pull[i]
+        r, g, b = (int(c) for c in colors[i])
+        cells = (
+            f'<b>{vid}</b>',
+            f'<span style="color:rgb({r},{g},{b})">&#9679;</span> '
+            f'{VehicleState(states[i]).text}',
+            html.escape(f.modes[i]),
+            "yes" if f.armed[i] else "no",
+            _num(float(f.battery[i]), ".0f"),
+            _num(math.degrees(float(f.tilt[i])), ".1f"),
+            _num(-float(f.p_ned[i, 2]), ".2f"),
+            _num(float(rope), ".2f"),
+            _num(h.heartbeat_age_s if h and h.heartbeat_age_s is not None else math.nan, ".1f"),
+            str(h.packets_lost) if h else "–",
+            str(h.refused) if h else "–",
+            _num(1e3 * h.rtt_s if h and h.rtt_s is not None else math.nan, ".0f"),
+        )
+        rows.append(f'<tr data-gcs="vehicle-{vid}">' +
+                    "".join(f'<td style="{_CELL}">{c}</td>' for c in cells) + "</tr>")
+    header = "".join(f'<th style="{_CELL};font-weight:500;color:#607d8b">{h}</th>'
+                     for h in head)
+    return ('<div style="overflow-x:auto;padding:0 4px">'
+            '<table style="border-collapse:collapse;font-size:0.8em">'
+            f'<tr>{header}</tr>{"".join(rows)}</table></div>')
+
+
+def events_html(snap: RuntimeSnapshot | None, *, limit: int = 8) -> str:
+    """The latest phase changes, safety warnings and errors, newest first."""
+    if snap is None or not snap.events:
+        return '<div style="padding:2px 8px;color:#90a4ae;font-size:0.8em">no events yet</div>'
+    lines = [f'<div style="color:{_LEVEL_COLOR.get(e.level, "#455a64")}">'
+             f'<span style="color:#90a4ae">{e.t:7.1f} s</span> {html.escape(e.text)}</div>'
+             for e in reversed(snap.events[-limit:])]
+    return ('<div data-gcs="events" style="padding:2px 8px;font-size:0.8em;line-height:1.4">'
+            + "".join(lines) + "</div>")
