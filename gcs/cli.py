@@ -110,12 +110,23 @@ def _cmd_report(args: argparse.Namespace) -> int:
     return 0
 
 
+def _default_team() -> str:
+    """configs/bebop_square.yaml here, or beside the installed package (run from anywhere)."""
+    from pathlib import Path
+
+    here = Path("configs/bebop_square.yaml")
+    if here.is_file():
+        return str(here)
+    beside = Path(__file__).resolve().parent.parent / "configs" / "bebop_square.yaml"
+    return str(beside) if beside.is_file() else str(here)
+
+
 def _cmd_demo(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from web.launch import run_demo
 
-    return run_demo(args.config, host=args.host, port=args.port,
+    return run_demo(args.config or _default_team(), host=args.host, port=args.port,
                     gamepad=Path(args.gamepad) if args.gamepad else None,
                     no_gamepad=args.no_gamepad)
 
@@ -201,7 +212,7 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Starts the simulated team (1x, embedded zenoh, no router), "
                                    "a GCS on the simulator's clock and the live page; prints "
                                    "the page's address. Ctrl-C stops everything.")
-    p.add_argument("--config", default="configs/bebop_square.yaml",
+    p.add_argument("--config", default=None,
                    help="team config (default configs/bebop_square.yaml)")
     _add_page_options(p)
     p.set_defaults(func=_cmd_demo)

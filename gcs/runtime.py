@@ -369,7 +369,9 @@ class Runtime:
             before = self._modes.get(vid)
             self._modes[vid] = mode
             if before is not None and mode != before:
-                level = "warning" if phase.streaming else "info"
+                # from lifting on, every vehicle must stay in the mode the GCS put it in
+                level = "warning" if phase in (Phase.LIFTING, Phase.FORMATION,
+                                               Phase.SETTING_DOWN) else "info"
                 self._event(level, f"vehicle {vid}: mode {mode} (was {before})")
 
     def _report_safety(self, verdict: SafetyVerdict) -> None:
