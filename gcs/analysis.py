@@ -40,7 +40,7 @@ import numpy as np
 from gcs.config import Team
 from gcs.motion import motion_basis
 
-__all__ = ["Analysis", "Violation", "analyze", "format_report", "rope_pull"]
+__all__ = ["Analysis", "Violation", "a_safe_span", "analyze", "format_report", "rope_pull"]
 
 #: Direction of the worst acceleration vector: 45 degrees to both axes (paper).
 _AXIS_FACTOR = math.sin(math.pi / 4)
@@ -55,6 +55,19 @@ def rope_pull(weight_share: float, rope_length: float, span: float) -> float:
     if half >= rope_length:
         return math.inf
     return weight_share * half / math.sqrt(rope_length**2 - half**2)
+
+
+def a_safe_span(horizontal_force: float, mass: float, accel: float, weight_share: float,
+                rope_length: float) -> float:
+    """Largest span (eq. Th's ||z2||) whose rope pull still leaves ``accel`` available, m.
+
+    ``F_h - T_h(span) >= m accel`` with ``T_h = weight_share tan(rope angle)``;
+    0 when even a vertical rope leaves too little.
+    """
+    spare = horizontal_force - mass * accel
+    if spare <= 0:
+        return 0.0
+    return 2.0 * rope_length * math.sin(math.atan(spare / weight_share))
 
 
 @dataclass(frozen=True)
@@ -249,8 +262,7 @@ def analyze(team: Team) -> Analysis:
                                     f"limit {max_axis:.3f} m/s^2"))
 
     # Largest vehicle-payload distance that leaves the configured acceleration available.
-    spare = f_h - m * cfg.limits.accel_norm
-    safe_span = 2.0 * l * math.sin(math.atan(spare / weight_share)) if spare > 0 else 0.0
+    safe_span = a_safe_span(f_h, m, cfg.limits.accel_norm, weight_share, l)
     safe_margin = safe_span - 2 * r_nom
     if safe_margin <= 0 and not violations:
         violations.append(Violation("limits.accel_norm",

@@ -142,6 +142,17 @@ def _cmd_run(args: argparse.Namespace) -> int:
                    no_gamepad=args.no_gamepad)
 
 
+def _cmd_replay(args: argparse.Namespace) -> int:
+    from gcs.logreader import LogError
+    from web.replay_page import run_replay
+
+    try:
+        return run_replay(args.file, host=args.host, port=args.port)
+    except (LogError, OSError) as exc:
+        print(f"gcs replay: error: {exc}", file=sys.stderr)
+        return 2
+
+
 def _add_page_options(p: argparse.ArgumentParser) -> None:
     """Options shared by the commands that serve the live page."""
     p.add_argument("--port", type=int, default=8080, help="port of the page (default 8080)")
@@ -225,6 +236,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--record", metavar="FILE", help="record the flight to a .tlog")
     _add_page_options(p)
     p.set_defaults(func=_cmd_run)
+
+    p = sub.add_parser("replay", help="replay a recorded flight on the page, with a timeline",
+                       description="The live page fed from a .tlog (ours or a plain autopilot "
+                                   "log): play, pause, speed, scrub, jump to phase changes and "
+                                   "warnings. Prints the page's address; Ctrl-C stops.")
+    p.add_argument("file", help="the .tlog")
+    p.add_argument("--port", type=int, default=8080, help="port of the page (default 8080)")
+    p.add_argument("--host", default="127.0.0.1",
+                   help="interface to serve the page on (default 127.0.0.1)")
+    p.set_defaults(func=_cmd_replay)
     return parser
 
 

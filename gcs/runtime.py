@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gcs.analysis import Analysis, analyze
+from gcs.analysis import Analysis, a_safe_span, analyze
 from gcs.clock import Clock, ClockStoppedError
 from gcs.config import Team
 from gcs.fleet import FleetState, read_fleet
@@ -108,7 +108,8 @@ class Runtime:
         self.truth_source = truth_source
         self.guidance = Guidance.from_team(team)
         self.analysis: Analysis = analysis if analysis is not None else analyze(team)
-        self.safe_radius = 0.5 * self.analysis.safe_span
+        self.safe_radius = 0.5 * self.analysis.safe_span  # at the largest acceleration
+        self._accel_last = 0.0
         self.period = 1.0 / team.config.guidance.rate_hz
         self._phase = Phase.CONNECT
         self._lock = threading.Lock()
@@ -153,6 +154,20 @@ class Runtime:
     def add_listener(self, callback: Callable[[RuntimeSnapshot], None]) -> None:
         """Call ``callback(snapshot)`` after every tick (on the loop thread: keep it short)."""
         self._listeners.append(callback)
+
+    def safe_radius_for(self, accel: float) -> float:
+        """Largest vehicle-to-centroid distance at which ``accel`` (m/s^2) is still available.
+
+        The analysis' safe deformation is this bound at the largest acceleration
+        the guidance may command; the loop applies it to the acceleration it does
+        command (the larger of the last tick's and a floor of a quarter of the
+        limit), so a gently flown team may deform more before its motion freezes.
+        """
+        a = self.analysis
+        cfg = self.team.config
+        demand = max(accel, 0.25 * cfg.limits.accel_norm)
+        return 0.5 * a_safe_span(a.horizontal_force, cfg.airframe.mass, demand,
+                                 a.rope_pull_bound, cfg.payload.rope_length)
 
     def taut_altitude(self, scale: float) -> float:
         """Vehicle altitude at which the ropes become taut with the payload on the ground, m."""
@@ -275,7 +290,7 @@ class Runtime:
             verdict = SafetyVerdict(freeze=True, land=False, events=())
         else:
             verdict = evaluate(self.team.config.safety, self.ids, fleet.age, fleet.p_ned,
-                               safe_radius=self.safe_radius)
+                               safe_radius=self.safe_radius_for(self._accel_last))
         self._report_safety(verdict)
         op = self.operator.snapshot(now)
         phase = self.phase
@@ -294,6 +309,7 @@ class Runtime:
         if phase.streaming:
             accel = self._stream(fleet, demand, op)
             self._advance(phase, op, now)
+        self._accel_last = float(np.linalg.norm(accel, axis=1).max()) if len(accel) else 0.0
         errors = self.team.formation.distance_errors(fleet.p_ned[:, :2], demand.scale)
         truth = self.truth_source() if self.truth_source is not None else None
         phase = self.phase  # after this tick's transitions: the recorder and the snapshot agree

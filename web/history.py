@@ -47,19 +47,23 @@ class History:
 
     def add(self, snap: RuntimeSnapshot) -> bool:
         """Take the snapshot's tick; False if it is not new or the team is not all known."""
-        fleet = snap.fleet
-        if fleet.t <= self._last_t:
+        return self.add_sample(snap.fleet.t, snap.fleet.p_ned, snap.fleet.v_ned,
+                               snap.demand.scale)
+
+    def add_sample(self, t: float, p_ned: np.ndarray, v_ned: np.ndarray, scale: float) -> bool:
+        """Take one tick from plain arrays (the live loop's snapshot or a replayed log)."""
+        if t <= self._last_t:
             return False
-        p = fleet.p_ned[:, :2]
-        v = fleet.v_ned[:, :2]
+        p = p_ned[:, :2]
+        v = v_ned[:, :2]
         if not (np.all(np.isfinite(p)) and np.all(np.isfinite(v))):
             return False
-        self._last_t = fleet.t
+        self._last_t = t
         e = self.view.edges
         distance = np.linalg.norm(p[e[:, 0]] - p[e[:, 1]], axis=1)
-        desired = snap.demand.scale * self.view.distances
-        self._samples.append((fleet.t, distance, desired, v.copy()))
-        while self._samples and self._samples[0][0] < fleet.t - self.window:
+        desired = scale * self.view.distances
+        self._samples.append((t, distance, desired, v.copy()))
+        while self._samples and self._samples[0][0] < t - self.window:
             self._samples.popleft()
         return True
 

@@ -1,0 +1,177 @@
+"""Flight replay, on a real recorded flight.
+
+Real parts: `gcs fly` records a simulated flight (its own sim process), the
+recorded bytes are read back independently with pymavlink, a plain autopilot
+log is written by the real recorder, and `gcs replay` serves a real viser page.
+"""
+
+from __future__ import annotations
+
+import signal
+import socket
+import subprocess
+import sys
+import time
+import urllib.request
+from pathlib import Path
+
+import numpy as np
+import pytest
+from pymavlink import mavutil
+
+from gcs.flightlog import FlightLog
+from gcs.link.encoder import MavlinkEncoder
+from gcs.recorder import TlogRecorder
+from web.replay import ReplayCursor
+from web.replay_page import ReplayUi, replay_summary_html
+from web.timeline import Timeline
+
+SQUARE = "configs/bebop_square.yaml"
+SHORT = "configs/scenarios/short_flight.yaml"
+
+
+def gcs(*args: str, timeout: float = 120) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "gcs", *args], capture_output=True, text=True,
+                          timeout=timeout, check=False)
+
+
+@pytest.fixture(scope="module")
+def flight(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("replay") / "flight.tlog"
+    out = gcs("fly", "--config", SQUARE, "--scenario", SHORT, "--record", str(path))
+    assert out.returncode == 0, out.stderr
+    return path
+
+
+def _raw(path: Path) -> list:
+    """Every message of the file, read by pymavlink (not by our reader)."""
+    conn = mavutil.mavlink_connection(str(path), dialect="common")
+    out = []
+    while (m := conn.recv_match()) is not None:
+        if m.get_type() != "BAD_DATA":
+            out.append(m)
+    return out
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def test_replayed_positions_are_the_recorded_ones(flight: Path) -> None:
+    raw = [m for m in _raw(flight) if m.get_type() == "LOCAL_POSITION_NED"]
+    cursor = ReplayCursor(FlightLog.load(flight))
+    assert cursor.ids == (1, 2, 3, 4)
+    checked = 0
+    for t in np.linspace(cursor.start + 1.0, cursor.end, 37):
+        state = cursor.state(float(t))
+        for i, vid in enumerate(cursor.ids):
+            before = [m for m in raw if m.get_srcSystem() == vid and m._timestamp <= t]
+            expected = [before[-1].x, before[-1].y, before[-1].z]
+            np.testing.assert_allclose(state.fleet.p_ned[i], expected, rtol=0, atol=1e-6)
+            checked += 1
+    assert checked == 37 * 4
+    # the guidance tick is the latest one at or before t, with its phase and arrays
+    t = cursor.start + 20.0
+    k = cursor.state(t).tick
+    assert cursor.log.tick_t[k] <= t < cursor.log.tick_t[k + 1]
+
+
+def test_scrubbing_backwards_gives_the_earlier_state(flight: Path) -> None:
+    log = FlightLog.load(flight)
+    fresh = ReplayCursor(log).state(log.tick_t[0] + 5.0)
+    ui = ReplayUi(log, port=_free_port())
+    try:
+        start = ui.timeline.start
+        ui.seek(start + 30.0)
+        late = ui.cursor.state(ui.timeline.t)
+        ui.seek(start + 5.0)
+        again = ui.cursor.state(ui.timeline.t)
+    finally:
+        ui.close()
+    assert late.tick > again.tick
+    np.testing.assert_array_equal(again.fleet.p_ned, fresh.fleet.p_ned)
+    assert again.phase == fresh.phase and again.tick == fresh.tick
+    assert [e.t for e in again.events] == [e.t for e in fresh.events]
+    assert len(late.events) > len(again.events)
+    assert again.truth is not None  # simulation logs carry payload and ropes
+
+
+def test_timeline_plays_pauses_and_clamps() -> None:
+    tl = Timeline(100.0, 110.0)
+    assert tl.advance(1.0) == 100.0  # paused
+    tl.speed = 100.0
+    assert tl.speed == 16.0
+    tl.speed = 0.01
+    assert tl.speed == 0.25
+    tl.speed = 4.0
+    tl.play()
+    assert tl.advance(1.0) == pytest.approx(104.0)
+    tl.pause()
+    assert tl.advance(1.0) == pytest.approx(104.0)
+    tl.play()
+    assert tl.advance(10.0) == 110.0 and not tl.playing
+    tl.seek(-5.0)
+    assert tl.t == 100.0
+
+
+def test_plain_autopilot_log_opens_and_says_what_is_missing(flight: Path,
+                                                            tmp_path: Path) -> None:
+    plain = tmp_path / "autopilot.tlog"
+    rec = TlogRecorder(plain, encoder=MavlinkEncoder(system_id=255, component_id=190),
+                       epoch=0.0)
+    for m in _raw(flight):
+        if m.get_srcSystem() in (1, 2, 3, 4):  # vehicles only: no GCS internals
+            rec.frame(m._timestamp, m.get_msgbuf())
+    rec.close()
+    log = FlightLog.load(plain)
+    assert log.team is None and len(log.tick_t) == 0
+    assert any("guidance internals" in m for m in log.missing)
+    cursor = ReplayCursor(log)
+    state = cursor.state(cursor.start + 10.0)
+    assert np.isfinite(state.fleet.p_ned).all() and state.phase is None
+    assert state.truth is None
+    html = replay_summary_html(state, start=cursor.start, name="x", missing=log.missing)
+    assert "guidance internals" in html and "team header" in html
+    ui = ReplayUi(log, port=_free_port())  # draws without edges, ticks or truth
+    try:
+        ui.seek(cursor.start + 20.0)
+    finally:
+        ui.close()
+
+
+def test_replay_command_serves_the_page_without_controls(flight: Path,
+                                                         tmp_path: Path) -> None:
+    bad = tmp_path / "bad.tlog"
+    bad.write_bytes(b"not a log at all" * 10)
+    out = gcs("replay", str(bad))
+    assert out.returncode == 2
+    assert len(out.stderr.strip().splitlines()) == 1 and "error" in out.stderr
+
+    port = _free_port()
+    proc = subprocess.Popen([sys.executable, "-m", "gcs", "replay", str(flight), "--port",
+                             str(port)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    try:
+        line = ""
+        deadline = time.monotonic() + 30
+        while "GCS replay:" not in line and time.monotonic() < deadline:
+            line = proc.stdout.readline()  # type: ignore[union-attr]
+        assert f"http://127.0.0.1:{port}" in line
+        with urllib.request.urlopen(f"http://127.0.0.1:{port}", timeout=5) as r:
+            assert r.status == 200
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(timeout=10) == 0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+
+    ui = ReplayUi(FlightLog.load(flight), port=_free_port())
+    try:
+        labels = {h.label for h in ui.server.gui._gui_input_handle_from_uuid.values()}
+    finally:
+        ui.close()
+    assert {"Play", "Pause", "Speed", "Time (s)", "Jump to event"} <= labels
+    assert not labels & {"ABORT", "Take control", "Arm", "Take off", "Land"}
