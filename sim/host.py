@@ -85,7 +85,7 @@ class SimHost:
         self._options = options
         self._sysids = tuple(team.formation.ids)
         self._period = 1.0 / cfg.guidance.rate_hz
-        keys = _signing_keys(team)
+        signing_keys = _signing_keys(team)
         self._world, self._autopilot = build_team(
             team_layout(team, ground_z_ned=world_config.ground.z_ned),
             payload_mass=cfg.payload.mass, rng=np.random.default_rng(options.seed),
@@ -114,7 +114,8 @@ class SimHost:
         measurements = self._world.measurements()
         self._endpoints = [
             VehicleEndpoint(self._autopilot, k, sysid=sysid, measurements=measurements,
-                            send=functools.partial(self._send, k), signing_key=keys.get(sysid))
+                            send=functools.partial(self._send, k),
+                            signing_key=signing_keys.get(sysid))
             for k, sysid in enumerate(self._sysids)]
 
     # -- facts ----------------------------------------------------------------------------------
@@ -128,20 +129,6 @@ class SimHost:
     def fleet(self) -> str:
         """Fleet name in the zenoh keys."""
         return self._fabric.fleet
-
-    @property
-    def sysids(self) -> tuple[int, ...]:
-        """System ids of the vehicles, team order."""
-        return self._sysids
-
-    @property
-    def endpoints(self) -> tuple[VehicleEndpoint, ...]:
-        """The vehicles' MAVLink endpoints, team order."""
-        return tuple(self._endpoints)
-
-    def status(self, sysid: int) -> VehicleStatus:
-        """Link status of vehicle ``sysid``."""
-        return self._status[self._sysids.index(sysid)]
 
     def ready_line(self) -> str:
         """One line naming every endpoint, printed when the host is reachable."""

@@ -6,13 +6,14 @@ reads the clock and the truth samples and sends clock acks.
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import signal
 import subprocess
 import sys
 import time
 import uuid
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
@@ -21,6 +22,7 @@ from gcs.link import ZenohSettings, keys, open_session
 from gcs.link.clockwire import decode_time, encode_time
 from gcs.simprocess import free_tcp_port
 from gcs.simtruth import SimTruth
+from sim.__main__ import main as sim_main
 
 ROOT = Path(__file__).resolve().parent.parent
 CONFIG = ROOT / "configs" / "bebop_square.yaml"
@@ -31,17 +33,23 @@ def sim_command(*args: str) -> list[str]:
     return [sys.executable, "-m", "sim", *args]
 
 
-def start(*args: str) -> tuple[subprocess.Popen[str], str]:
-    """Start the host and wait for its ready line."""
+@contextlib.contextmanager
+def running(*args: str) -> Iterator[tuple[subprocess.Popen[str], str]]:
+    """Start the host, wait for its ready line; the process never outlives the test."""
     proc = subprocess.Popen(sim_command(*args), cwd=ROOT, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
-    assert proc.stdout is not None
-    line = proc.stdout.readline().strip()
-    if not line.startswith("sim ready: "):
-        proc.kill()
-        _, err = proc.communicate(timeout=10)
-        pytest.fail(f"no ready line (got {line!r}): {err}")
-    return proc, line
+    try:
+        assert proc.stdout is not None
+        line = proc.stdout.readline().strip()
+        if not line.startswith("sim ready: "):
+            proc.kill()
+            _, err = proc.communicate(timeout=10)
+            pytest.fail(f"no ready line (got {line!r}): {err}")
+        yield proc, line
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate(timeout=10)
 
 
 def eventually(condition: Callable[[], bool], what: str, timeout_s: float = 5.0) -> None:
@@ -51,27 +59,39 @@ def eventually(condition: Callable[[], bool], what: str, timeout_s: float = 5.0)
         time.sleep(0.02)
 
 
-def test_bad_config_is_one_line_and_exit_status_2(tmp_path: Path) -> None:
+def test_bad_config_is_one_line_and_exit_status_2(tmp_path: Path,
+                                                   capsys: pytest.CaptureFixture[str]) -> None:
     text = CONFIG.read_text().replace("airframes/bebop2.yaml",
                                       str(ROOT / "configs" / "airframes" / "bebop2.yaml"))
     bad = tmp_path / "team.yaml"
     bad.write_text(text.replace("mass: 0.4   ", "mass: -0.4  "))
-    for args, names in ((("--config", str(bad)), "payload.mass"),
-                        (("--config", str(CONFIG), "--listen", "not-an-endpoint"), "listen")):
-        result = subprocess.run(sim_command(*args), cwd=ROOT, capture_output=True, text=True,
-                                timeout=60)
-        assert result.returncode == 2, result.stderr
-        assert result.stdout == ""
-        lines = result.stderr.strip().splitlines()
-        assert len(lines) == 1 and lines[0].startswith("sim: error: "), result.stderr
-        assert names in lines[0]
+    result = subprocess.run(sim_command("--config", str(bad)), cwd=ROOT, capture_output=True,
+                            text=True, timeout=60)
+    assert result.returncode == 2 and result.stdout == ""
+    assert result.stderr.startswith("sim: error: ") and result.stderr.count("\n") == 1
+    assert "payload.mass" in result.stderr
+    for args, named in ((("--config", str(tmp_path / "missing.yaml")), "missing.yaml"),
+                        (("--config", str(CONFIG), "--listen", "tcp-127.0.0.1"), "listen"),
+                        (("--config", str(CONFIG), "--duration", "-1"), "duration")):
+        assert sim_main(list(args)) == 2
+        out, err = capsys.readouterr()
+        assert out == "" and err.startswith("sim: error: ") and err.count("\n") == 1, err
+        assert named in err
 
 
 def test_lockstep_host_waits_for_acks_and_stops_cleanly_on_sigint() -> None:
     fleet = f"simcli-{uuid.uuid4().hex[:8]}"
     endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
-    proc, ready = start("--config", str(CONFIG), "--listen", endpoint, "--fleet", fleet,
-                        "--lockstep", "--seed", "3")
+    with running("--config", str(CONFIG), "--listen", endpoint, "--fleet", fleet,
+                 "--lockstep", "--seed", "3") as (proc, ready):
+        err = lockstep_as_a_gcs(proc, ready, fleet, endpoint)
+    assert "sim: stopped at t = 1.250 s" in err
+    assert "ignored clock ack" in err
+
+
+def lockstep_as_a_gcs(proc: subprocess.Popen[str], ready: str, fleet: str,
+                      endpoint: str) -> str:
+    """Play the GCS's part against a lockstep host; returns its stderr after SIGINT."""
     assert ready == (f"sim ready: fleet {fleet}, 4 vehicles, zenoh listen {endpoint}, "
                      "speed max, lockstep 0.25 s")
     session = open_session(ZenohSettings(connect=(endpoint,)))
@@ -107,17 +127,16 @@ def test_lockstep_host_waits_for_acks_and_stops_cleanly_on_sigint() -> None:
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=10)
     assert proc.returncode == 0, err
-    assert "sim: stopped at t = 1.250 s" in err
-    assert "ignored clock ack" in err
+    return err
 
 
 def test_duration_runs_as_fast_as_possible_and_exits_by_itself() -> None:
     start_wall = time.monotonic()
-    proc, ready = start("--config", str(CONFIG), "--listen",
-                        f"tcp/127.0.0.1:{free_tcp_port()}", "--fleet",
-                        f"simcli-{uuid.uuid4().hex[:8]}", "--speed", "max", "--duration", "3")
-    assert ready.endswith("speed max")
-    _, err = proc.communicate(timeout=60)
+    with running("--config", str(CONFIG), "--listen", f"tcp/127.0.0.1:{free_tcp_port()}",
+                 "--fleet", f"simcli-{uuid.uuid4().hex[:8]}", "--speed", "max", "--duration",
+                 "3") as (proc, ready):
+        assert ready.endswith("speed max")
+        _, err = proc.communicate(timeout=60)
     assert proc.returncode == 0, err
     assert "sim: stopped at t = 3.000 s" in err
     assert time.monotonic() - start_wall < 30.0

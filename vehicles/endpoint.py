@@ -122,16 +122,6 @@ class VehicleEndpoint:
         """The vehicle's MAVLink system id."""
         return self._encoder.system_id
 
-    @property
-    def index(self) -> int:
-        """The vehicle's index in the autopilot's arrays."""
-        return self._index
-
-    @property
-    def streams(self) -> StreamSchedule:
-        """Telemetry rates in force."""
-        return self._streams
-
     def counters(self) -> EndpointCounters:
         """Snapshot of the counters."""
         return EndpointCounters(self._decoder.stats(), self._not_for_us, self._commands,
@@ -175,16 +165,17 @@ class VehicleEndpoint:
                 self._refusal_reported[verdict.refusal] = t
                 self._status_text(Severity.WARNING, verdict.text)
             return
+        self._accepted += 1
+        # The echo first: the checks passed, so the autopilot takes it (and the GCS waits).
+        self._emit(self._encoder.mav.position_target_local_ned_encode(
+            time_boot_ms(t), msg.coordinate_frame, msg.type_mask, msg.x, msg.y, msg.z, msg.vx,
+            msg.vy, msg.vz, msg.afx, msg.afy, msg.afz, msg.yaw, msg.yaw_rate))
         if setpoint.kind is SetpointKind.ACCEL:
             self._autopilot.set_accel_setpoint(self._index, setpoint.accel_ned)
         else:
             assert setpoint.z_ned is not None
             self._autopilot.set_accel_xy_pos_z_setpoint(self._index, setpoint.accel_ned[:2],
                                                         setpoint.z_ned)
-        self._accepted += 1
-        self._emit(self._encoder.mav.position_target_local_ned_encode(
-            time_boot_ms(t), msg.coordinate_frame, msg.type_mask, msg.x, msg.y, msg.z, msg.vx,
-            msg.vy, msg.vz, msg.afx, msg.afy, msg.afz, msg.yaw, msg.yaw_rate))
 
     def _timesync(self, msg: MavMessage, t: float) -> None:
         if msg.tc1 == 0:  # a probe; non-zero tc1 is someone's answer, not for us

@@ -24,7 +24,6 @@ __all__ = [
     "CommCounters",
     "VehicleView",
     "build_report",
-    "sim_mode",
     "time_boot_ms",
 ]
 
@@ -46,7 +45,7 @@ _IMU_FIELDS = 0b111111
 _U16 = 0xFFFF
 
 
-def sim_mode(mode: Mode) -> SimMode:
+def _sim_mode(mode: Mode) -> SimMode:
     """The HEARTBEAT custom mode of an autopilot mode (DISARMED is reported as IDLE)."""
     return SimMode.IDLE if mode is Mode.DISARMED else SimMode(int(mode))
 
@@ -93,7 +92,7 @@ def _heartbeat(mav: mavlink.MAVLink, v: VehicleView) -> MavMessage:
         state = mavlink.MAV_STATE_ACTIVE if armed else mavlink.MAV_STATE_STANDBY
     return mav.heartbeat_encode(mavlink.MAV_TYPE_QUADROTOR, mavlink.MAV_AUTOPILOT_GENERIC,
                                 CUSTOM_MODE_ENABLED | (SAFETY_ARMED if armed else 0),
-                                int(sim_mode(mode)), state)
+                                int(_sim_mode(mode)), state)
 
 
 def _position(mav: mavlink.MAVLink, v: VehicleView) -> MavMessage:

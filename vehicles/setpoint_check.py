@@ -39,11 +39,6 @@ class Refusal(Enum):
     NOT_FINITE = "NaN or infinite value"
     OUT_OF_RANGE = "value out of range"
 
-    @property
-    def text(self) -> str:
-        """Readable reason."""
-        return self.value
-
 
 @dataclass(frozen=True)
 class SetpointVerdict:

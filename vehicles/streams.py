@@ -60,11 +60,6 @@ class StreamSchedule:
         self._period = {m: _period(r) for m, r in self._defaults.items()}
         self._next = dict.fromkeys(TelemetryMessage, 0.0)
 
-    def rate_hz(self, message: TelemetryMessage) -> float:
-        """Current rate of ``message``, Hz (0: not streamed)."""
-        period = self._period[message]
-        return 0.0 if period is None else 1.0 / period
-
     def set_interval(self, message_id: int, interval_us: float, t: float) -> IntervalRequest:
         """Apply ``MAV_CMD_SET_MESSAGE_INTERVAL`` (param1 message id, param2 interval) at ``t``."""
         try:
