@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import html
 import math
-import socket
 import threading
 import time
 from pathlib import Path
@@ -30,6 +29,7 @@ from web.replay import ReplayCursor, ReplayState, replay_view
 from web.scene import SceneView
 from web.timeline import SPEEDS, Timeline
 from web.trails import Trails
+from web.ui import page_url
 
 __all__ = ["ReplayUi", "replay_summary_html", "run_replay"]
 
@@ -160,8 +160,8 @@ class ReplayUi:
 
     @property
     def url(self) -> str:
-        host = socket.gethostname() if self.host in ("0.0.0.0", "::") else self.host
-        return f"http://{host}:{self.server.get_port()}"
+        """Where to point a browser."""
+        return page_url(self.host, self.server)
 
     def start(self) -> None:
         self._thread.start()

@@ -42,9 +42,15 @@ from web.scene import SceneView
 from web.status import UiStats, events_html, summary_html, vehicles_html
 from web.trails import Trails
 
-__all__ = ["WebUi"]
+__all__ = ["WebUi", "page_url"]
 
 _log = logging.getLogger(__name__)
+
+
+def page_url(host: str, server: viser.ViserServer) -> str:
+    """Where a browser reaches ``server`` served on ``host`` (the machine's name for any)."""
+    name = socket.gethostname() if host in ("0.0.0.0", "::") else host
+    return f"http://{name}:{server.get_port()}"
 
 
 class WebUi:
@@ -113,8 +119,7 @@ class WebUi:
     @property
     def url(self) -> str:
         """Where to point a browser."""
-        host = socket.gethostname() if self.host in ("0.0.0.0", "::") else self.host
-        return f"http://{host}:{self.server.get_port()}"
+        return page_url(self.host, self.server)
 
     def start(self) -> None:
         """Start drawing (the server is already serving)."""
