@@ -10,9 +10,14 @@ keeps running its physics at real-time speed (4 vehicles, full telemetry)
 meanwhile. The setpoints go to a disarmed vehicle, which accepts and echoes
 them without flying.
 
-Prints a summary line, then one JSON object on the last line::
+For scale on a shared machine it first measures the floor: the same number
+of bare zenoh round trips between this process and a minimal echo process
+(one Python callback each way, no MAVLink, no simulation).
 
-    {"count": 2000, "p50_ms": ..., "p99_ms": ..., "max_ms": ..., "target_p99_ms": 1.0}
+Prints summary lines, then one JSON object on the last line::
+
+    {"count": 2000, "p50_ms": ..., "p99_ms": ..., "max_ms": ...,
+     "zenoh_floor_p50_ms": ..., "zenoh_floor_p99_ms": ..., "target_p99_ms": 1.0}
 
     python bench/link_latency.py [--count 2000] [--config configs/bebop_square.yaml]
 """
@@ -40,6 +45,20 @@ _SYSID = 1
 _WARMUP = 50
 _TIMEOUT_S = 2.0
 _TARGET_P99_MS = 1.0
+
+
+_ECHO = """
+import sys
+from gcs.link import ZenohSettings, open_session
+session = open_session(ZenohSettings(listen=(sys.argv[1],), connect=()))
+pong = session.declare_publisher("bench/pong", express=True)
+ping = session.declare_subscriber("bench/ping", lambda s: pong.put(s.payload.to_bytes()))
+print("ready", flush=True)
+sys.stdin.read()
+ping.undeclare()
+session.close()
+"""
+"""A minimal zenoh echo process: the floor under any round trip between two processes."""
 
 
 def _free_port() -> int:
@@ -78,6 +97,46 @@ def _round_trips(link: Link, count: int) -> np.ndarray:
     return out * 1000.0
 
 
+def _zenoh_floor(count: int) -> np.ndarray:
+    """Round trips (ms) of a 60-byte payload to the echo process and back."""
+    endpoint = f"tcp/127.0.0.1:{_free_port()}"
+    echo = subprocess.Popen([sys.executable, "-c", _ECHO, endpoint], cwd=_ROOT,
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    try:
+        assert echo.stdout is not None and echo.stdin is not None
+        if echo.stdout.readline().strip() != "ready":
+            raise RuntimeError(f"echo process did not start (exit {echo.poll()})")
+        session = open_session(ZenohSettings(connect=(endpoint,)))
+        got = threading.Event()
+        pong = session.declare_subscriber("bench/pong", lambda _: got.set())
+        ping = session.declare_publisher("bench/ping", express=True)
+        try:
+            payload = bytes(60)
+            while not got.is_set():  # until the route is up
+                ping.put(payload)
+                got.wait(0.05)
+            out = np.empty(count)
+            for k in range(-_WARMUP, count):
+                got.clear()
+                start = time.perf_counter()
+                ping.put(payload)
+                if not got.wait(_TIMEOUT_S):
+                    raise RuntimeError(f"no echo of ping {k} within {_TIMEOUT_S} s")
+                if k >= 0:
+                    out[k] = time.perf_counter() - start
+        finally:
+            pong.undeclare()
+            ping.undeclare()
+            session.close()
+        echo.stdin.close()
+        echo.wait(timeout=10.0)
+    finally:
+        if echo.poll() is None:
+            echo.kill()
+            echo.wait()
+    return out * 1000.0
+
+
 def main() -> int:
     """Run the benchmark; returns the exit status."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -85,6 +144,7 @@ def main() -> int:
     parser.add_argument("--config", default=str(_ROOT / "configs" / "bebop_square.yaml"),
                         help="team file for the sim host")
     args = parser.parse_args()
+    floor = _zenoh_floor(args.count)
     endpoint = f"tcp/127.0.0.1:{_free_port()}"
     sim = subprocess.Popen(
         [sys.executable, "-m", "sim", "--config", args.config, "--listen", endpoint,
@@ -111,10 +171,14 @@ def main() -> int:
         sim.terminate()
         sim.wait(timeout=10.0)
     p50, p99 = np.percentile(ms, [50.0, 99.0])
-    print(f"{ready}\nsetpoint round trip over zenoh: {args.count} samples, p50 {p50:.3f} ms, "
+    f50, f99 = np.percentile(floor, [50.0, 99.0])
+    print(f"{ready}\nbare zenoh round trip (floor): p50 {f50:.3f} ms, p99 {f99:.3f} ms\n"
+          f"setpoint round trip over zenoh: {args.count} samples, p50 {p50:.3f} ms, "
           f"p99 {p99:.3f} ms, max {ms.max():.3f} ms (target p99 <= {_TARGET_P99_MS} ms)")
     print(json.dumps({"count": int(args.count), "p50_ms": round(float(p50), 4),
                       "p99_ms": round(float(p99), 4), "max_ms": round(float(ms.max()), 4),
+                      "zenoh_floor_p50_ms": round(float(f50), 4),
+                      "zenoh_floor_p99_ms": round(float(f99), 4),
                       "target_p99_ms": _TARGET_P99_MS}))
     return 0
 

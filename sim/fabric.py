@@ -7,7 +7,7 @@ are in one place and the host loop never touches zenoh directly:
 =================================================  =====  ======================================
 key                                                dir    payload
 =================================================  =====  ======================================
-``fleet/<f>/vehicle/<sysid>/mavlink/from_vehicle`` out    one MAVLink 2 frame
+``fleet/<f>/vehicle/<sysid>/mavlink/from_vehicle`` out    whole MAVLink 2 frames
 ``fleet/<f>/vehicle/<sysid>/mavlink/to_vehicle``   in     MAVLink 2 frames
 ``fleet/<f>/alive/<sysid>``                        token  liveliness, while the vehicle lives
 ``fleet/<f>/clock``                                out    sim time (:mod:`gcs.link.clockwire`)

@@ -170,7 +170,9 @@ def test_team_takes_off_flies_offboard_and_a_killed_vehicle_vanishes(gcs: Gcs) -
         pitches.append(t.attitude.rpy[1])
         assert t.status is not None and 11.0 < t.status.battery_voltage_v < 12.6
         health = manager.links[s].health
-        assert health.refused == 0 and health.packets_lost == 0
+        # Vehicle frames block rather than drop in the sim (DROP lost 4-10 % here under load);
+        # a rare gap is tolerated so that a machine stalled by other work cannot fail this.
+        assert health.refused == 0 and health.loss_ratio < 0.01, health
     assert abs(sum(moved_east) / 4) < 0.1  # but the team as a whole went straight north
     assert sum(pitches) / 4 < -0.02  # each leans out against its rope; all lean forward too
 
@@ -178,9 +180,12 @@ def test_team_takes_off_flies_offboard_and_a_killed_vehicle_vanishes(gcs: Gcs) -
     assert gcs.clock == sorted(gcs.clock) and gcs.clock[-1] > 5.0
     last = gcs.truth[-1]
     assert last.ids == (1, 2, 3, 4) and last.payload_p_ned[2] < -0.2  # lifted
-    for k, s in enumerate(sysids):  # truth agrees with what MAVLink reported
-        reported = manager.links[s].telemetry.position.p_ned  # type: ignore[union-attr]
-        assert math.dist(last.vehicle_p_ned[k], reported) < 0.1
+    for k, s in enumerate(sysids):  # truth agrees with what MAVLink reported at that time
+        reported = manager.links[s].telemetry.position
+        assert reported is not None
+        same_time = min(gcs.truth, key=lambda x: abs(x.t - reported.time_boot_s))
+        lag = abs(same_time.t - reported.time_boot_s)
+        assert math.dist(same_time.vehicle_p_ned[k], reported.p_ned) < 0.03 + 1.5 * lag
     assert sum(last.rope_tension) > 0.8 * 0.4 * 9.81  # together they carry the 0.4 kg
     assert last.payload_v_ned[0] > 0.3
 
@@ -217,33 +222,46 @@ def test_cut_link_goes_silent_both_ways_until_restored(gcs: Gcs) -> None:
 
 def test_junk_and_foreign_frames_over_zenoh_leave_the_vehicle_answering(gcs: Gcs) -> None:
     link = gcs.manager.links[1]
-    statuses: list[MavMessage] = []
-    link.add_message_listener(lambda m: statuses.append(m) if m.get_type() == "SYS_STATUS"
-                              else None)
+    heard: list[MavMessage] = []
+    link.add_message_listener(heard.append)
     to_vehicle = keys.mavlink(gcs.fleet, 1, keys.Direction.TO_VEHICLE)
     stranger = MavlinkEncoder(system_id=200, component_id=190)
-    foreign = stranger.encode(stranger.mav.command_long_encode(
-        2, 1, mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 0, 0, 21196, 0, 0, 0, 0, 0))
-    good = stranger.encode(stranger.mav.command_long_encode(
-        1, 1, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, 0,
-        mavlink.MAVLINK_MSG_ID_SYS_STATUS, 100_000, 0, 0, 0, 0, 0))
+
+    def interval(target: int, message: int, interval_us: float) -> bytes:
+        return stranger.encode(stranger.mav.command_long_encode(
+            target, 1, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, 0, message, interval_us,
+            0, 0, 0, 0, 0))
+
+    foreign = interval(2, mavlink.MAVLINK_MSG_ID_HIGHRES_IMU, -1)  # for vehicle 2: ignored
+    good = interval(1, mavlink.MAVLINK_MSG_ID_SYS_STATUS, 100_000)  # SYS_STATUS at 10 Hz
     publisher = gcs.session.declare_publisher(to_vehicle)
     try:
         for k in range(50):
             publisher.put(bytes((k * 37 + i * 11) & 0xFF for i in range(64)))  # noise
         publisher.put(good[:-4])  # truncated
-        publisher.put(foreign)  # for vehicle 2 on vehicle 1's key: ignored
+        publisher.put(foreign)
         publisher.put(b"\xfd\xfd\xfd")
-        publisher.put(good)  # SYS_STATUS at 10 Hz from now on
+        publisher.put(good)
     finally:
         publisher.undeclare()
-    eventually(lambda: any(m.errors_count1 >= 1 and m.errors_count2 > 1000 and m.errors_comm >= 2
-                           for m in statuses), "SYS_STATUS counting the junk", timeout_s=3.0)
-    count = len(statuses)
-    time.sleep(0.5)
-    assert len(statuses) - count >= 3  # the good command among the junk took effect (10 Hz)
+
+    def counted() -> int | None:
+        """Index of the first SYS_STATUS that counts all of the junk."""
+        return next((k for k, m in enumerate(heard) if m.get_type() == "SYS_STATUS"
+                     and m.errors_count1 >= 1 and m.errors_count2 > 1000
+                     and m.errors_comm >= 2), None)
+
+    eventually(lambda: counted() is not None, "SYS_STATUS counting the junk", timeout_s=3.0)
+    first = counted()
+    assert first is not None
+
+    def after(kind: str) -> int:
+        return sum(1 for m in heard[first:] if m.get_type() == kind)
+
+    eventually(lambda: after("LOCAL_POSITION_NED") >= 100, "2 s of telemetry (sim time)")
+    assert after("SYS_STATUS") >= 15  # 10 Hz against 50 Hz positions: the good command worked
+    assert after("HIGHRES_IMU") >= 15  # the foreign one did not stop vehicle 1's IMU stream
     assert link.health.alive
-    assert gcs.manager.links[2].telemetry.heartbeat.armed  # type: ignore[union-attr]
 
 
 def test_refused_setpoints_are_reported_and_the_vehicle_stays_in_hold(gcs: Gcs) -> None:

@@ -40,7 +40,6 @@ from gcs.link.telemetry import Severity
 from vehicles.autopilot import Autopilot
 from vehicles.battery import Battery
 from vehicles.commands import MavResult, execute_command
-from vehicles.modes import Mode
 from vehicles.reports import CommCounters, VehicleView, build_report, time_boot_ms
 from vehicles.setpoint_check import Refusal, SetpointLimits, check_setpoint
 from vehicles.state import Measurements
@@ -103,10 +102,13 @@ class VehicleEndpoint:
         self._battery = battery if battery is not None else Battery()
         self._streams = StreamSchedule(rates_hz)
         self._limits = limits if limits is not None else SetpointLimits()
-        self._reported_mode: Mode | None = None
+        self._reported_mode: int | None = None
+        """Autopilot mode (a :class:`~vehicles.modes.Mode` value) the last HEARTBEAT showed."""
         self._last_update: float | None = None
         self._refusal_reported: dict[Refusal, float] = {}
         self._statustext_id = 0
+        self._batch: list[bytes] | None = None
+        """Frames held back during :meth:`update` to go out as one payload."""
         self._not_for_us = 0
         self._commands = 0
         self._accepted = 0
@@ -184,32 +186,46 @@ class VehicleEndpoint:
     # -- outbound -------------------------------------------------------------------------------
 
     def update(self, t: float) -> None:
-        """After physics reached sim time ``t``: drain the battery, send what is due."""
+        """After physics reached sim time ``t``: drain the battery, send what is due.
+
+        What is due goes out as one payload (several whole frames, as every MAVLink
+        datagram reader accepts): one zenoh put costs as much as encoding a frame.
+        """
         if self._last_update is not None:
             kf = self._autopilot.airframe.thrust_coefficient
             rotor_speed = self._autopilot.state.rotor_speed_model[self._index].tolist()
             self._battery.draw([kf * w * w for w in rotor_speed], t - self._last_update)
         self._last_update = t
-        self._heartbeat_if_mode_changed(t)
-        due = list(self._streams.due(t))
-        if due:
-            view = self._view(t)
-            for message in due:
-                self._emit(build_report(self._encoder.mav, message, view))
+        frames: list[bytes] = []
+        self._batch = frames
+        try:
+            self._heartbeat_if_mode_changed(t)
+            due = self._streams.due(t)
+            if due:
+                view = self._view(t, with_comm=TelemetryMessage.SYS_STATUS in due)
+                for message in due:
+                    self._emit(build_report(self._encoder.mav, message, view))
+        finally:
+            self._batch = None
+        if frames:
+            self._send(b"".join(frames))
 
     def _heartbeat_if_mode_changed(self, t: float) -> None:
-        mode = self._autopilot.mode(self._index)
-        if mode is self._reported_mode:
+        mode = int(self._autopilot.state.mode[self._index])
+        if mode == self._reported_mode:
             return
         self._reported_mode = mode
-        self._emit(build_report(self._encoder.mav, TelemetryMessage.HEARTBEAT, self._view(t)))
+        self._emit(build_report(self._encoder.mav, TelemetryMessage.HEARTBEAT,
+                                self._view(t, with_comm=False)))
         self._streams.sent(TelemetryMessage.HEARTBEAT, t)
 
-    def _view(self, t: float) -> VehicleView:
-        stats = self._decoder.stats()
-        comm = CommCounters(frames=stats.frames, dropped=stats.dropped,
-                            not_for_us=self._not_for_us, garbage_bytes=stats.garbage_bytes,
-                            setpoints_refused=self._refused)
+    def _view(self, t: float, *, with_comm: bool) -> VehicleView:
+        comm = None
+        if with_comm:  # only SYS_STATUS reads them; a snapshot of the decoder is not free
+            stats = self._decoder.stats()
+            comm = CommCounters(frames=stats.frames, dropped=stats.dropped,
+                                not_for_us=self._not_for_us, garbage_bytes=stats.garbage_bytes,
+                                setpoints_refused=self._refused)
         return VehicleView(self._autopilot, self._index, self._measurements,
                            self._battery.reading(), comm, t)
 
@@ -226,4 +242,8 @@ class VehicleEndpoint:
                 int(severity), data[start:start + _STATUSTEXT_LEN], self._statustext_id, seq))
 
     def _emit(self, msg: MavMessage) -> None:
-        self._send(self._encoder.encode(msg))
+        frame = self._encoder.encode(msg)
+        if self._batch is not None:
+            self._batch.append(frame)
+        else:
+            self._send(frame)

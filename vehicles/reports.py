@@ -74,7 +74,8 @@ class VehicleView:
     index: int
     measurements: Measurements
     battery: BatteryReading
-    comm: CommCounters
+    comm: CommCounters | None
+    """Link counters; only SYS_STATUS needs them (None when it is not being sent)."""
     t: float
 
 
@@ -126,6 +127,7 @@ def _imu(mav: mavlink.MAVLink, v: VehicleView) -> MavMessage:
 
 def _sys_status(mav: mavlink.MAVLink, v: VehicleView) -> MavMessage:
     b, c = v.battery, v.comm
+    assert c is not None, "SYS_STATUS needs the link counters"
     health = _SENSORS if b.remaining >= LOW_BATTERY else _SENSORS & ~int(
         mavlink.MAV_SYS_STATUS_SENSOR_BATTERY)
     offered = c.frames + c.dropped

@@ -10,7 +10,7 @@ the step rate is delivered once per step.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Mapping
+from collections.abc import Mapping
 from enum import Enum
 from types import MappingProxyType
 
@@ -59,6 +59,7 @@ class StreamSchedule:
         self._defaults = {m: float(rates_hz.get(m, 0.0)) for m in TelemetryMessage}
         self._period = {m: _period(r) for m, r in self._defaults.items()}
         self._next = dict.fromkeys(TelemetryMessage, 0.0)
+        self._soonest = 0.0  # no message is due before this: most steps end here
 
     def set_interval(self, message_id: int, interval_us: float, t: float) -> IntervalRequest:
         """Apply ``MAV_CMD_SET_MESSAGE_INTERVAL`` (param1 message id, param2 interval) at ``t``."""
@@ -75,6 +76,7 @@ class StreamSchedule:
         else:
             self._period[message] = interval_us / 1e6
         self._next[message] = t
+        self._soonest = min(self._soonest, t)
         return IntervalRequest.SET
 
     def sent(self, message: TelemetryMessage, t: float) -> None:
@@ -83,14 +85,22 @@ class StreamSchedule:
         if period is not None:
             self._next[message] = t + period
 
-    def due(self, t: float) -> Iterator[TelemetryMessage]:
-        """Messages due at ``t``; each is rescheduled as it is yielded (no bursts after a gap)."""
+    def due(self, t: float) -> list[TelemetryMessage]:
+        """Messages due at ``t``, each rescheduled (one message after a gap, never a burst)."""
+        if t < self._soonest:
+            return []
+        out = []
+        soonest = math.inf
         for message, period in self._period.items():
-            if period is None or t < self._next[message]:
+            if period is None:
                 continue
-            following = self._next[message] + period
-            self._next[message] = following if following > t else t + period
-            yield message
+            if t >= self._next[message]:
+                following = self._next[message] + period
+                self._next[message] = following if following > t else t + period
+                out.append(message)
+            soonest = min(soonest, self._next[message])
+        self._soonest = soonest
+        return out
 
 
 def _period(rate_hz: float) -> float | None:
