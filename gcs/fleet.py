@@ -68,6 +68,6 @@ def read_fleet(ids: Sequence[int], profiles: Mapping[int, AutopilotProfile],
             armed[i] = tel.heartbeat.armed
         if tel.status is not None and tel.status.battery_remaining_pct is not None:
             battery[i] = tel.status.battery_remaining_pct
-        modes.append(profile.mode_text())
+        modes.append(profile.mode_text(tel.heartbeat))
     return FleetState(t=now, ids=tuple(ids), p_ned=p, v_ned=v, yaw=yaw, tilt=tilt, age=age,
                       heartbeat_age=hb_age, armed=armed, battery=battery, modes=tuple(modes))

@@ -108,7 +108,6 @@ class Runtime:
         self.truth_source = truth_source
         self.guidance = Guidance.from_team(team)
         self.analysis: Analysis = analysis if analysis is not None else analyze(team)
-        self.safe_radius = 0.5 * self.analysis.safe_span  # at the largest acceleration
         self._accel_last = 0.0
         self.period = 1.0 / team.config.guidance.rate_hz
         self._phase = Phase.CONNECT
@@ -116,6 +115,8 @@ class Runtime:
         self._events: collections.deque[Event] = collections.deque(maxlen=200)
         self._active_warnings: set[tuple[str, int]] = set()
         self._modes: dict[int, str] = {}
+        self.errors = 0
+        """Error events so far (the event list keeps only the recent ones)."""
         self._pool = ThreadPoolExecutor(max_workers=max(2, len(self.ids)),
                                         thread_name_prefix="gcs-action")
         self._action_busy = threading.Lock()
@@ -185,6 +186,8 @@ class Runtime:
         t = self.clock.now()
         with self._lock:
             self._events.append(Event(t, level, text))
+            if level == "error":
+                self.errors += 1
         if self.recorder is not None:
             severity = {"info": 6, "warning": 4, "error": 3}[level]
             self.recorder.text(t, text, severity=severity)
@@ -208,13 +211,15 @@ class Runtime:
             self._set_phase(target)
             return
         if action in (Action.LIFT, Action.SET_DOWN):
-            self._set_phase(target)
+            # target altitude first: a tick between the two would find the old one
+            # reached and end the phase at once
             scale = self.operator.snapshot(self.clock.now()).demand.scale
             base = self.taut_altitude(scale)
             height = base + (self.team.config.flight.lift_height if action is Action.LIFT
                              else -self.team.config.flight.takeoff_slack)
             self.operator.set_altitude(height, now=self.clock.now(),
                                        rate=self.team.config.flight.lift_rate)
+            self._set_phase(target)
             return
         if not self._action_busy.acquire(blocking=False):
             raise PhaseError(f"cannot {action.text}: another action is still running")

@@ -176,11 +176,11 @@ def _wait_ready(runtime: Runtime, clock: Clock, timeout: float, where: str) -> N
 def _wait_phase(runtime: Runtime, clock: Clock, phase: Phase, timeout: float,
                 where: str) -> None:
     start = clock.now()
-    seen_errors = len([e for e in runtime.events() if e.level == "error"])
+    seen_errors = runtime.errors
     while runtime.phase is not phase:
-        errors = [e for e in runtime.events() if e.level == "error"]
-        if len(errors) > seen_errors:
-            raise ScenarioError(f"{where}: {errors[-1].text}")
+        if runtime.errors > seen_errors:
+            last = [e.text for e in runtime.events() if e.level == "error"]
+            raise ScenarioError(f"{where}: {last[-1] if last else 'an action failed'}")
         if clock.now() - start > timeout:
             raise ScenarioError(f"{where}: still {runtime.phase.text} after {timeout:g} s "
                                 f"(waiting for {phase.text})")

@@ -55,8 +55,8 @@ class AutopilotProfile(Protocol):
         """Channels of the setpoints this profile sends."""
         ...
 
-    def mode_text(self) -> str:
-        """Current flight mode from the latest HEARTBEAT, readable (``"unknown"`` if none)."""
+    def mode_text(self, heartbeat: Heartbeat | None = None) -> str:
+        """Flight mode of ``heartbeat`` (default: the latest), readable; ``"unknown"`` if none."""
         ...
 
     def arm(self) -> None:
@@ -101,6 +101,19 @@ class ProfileBase:
     def link(self) -> Link:
         """The vehicle's link."""
         return self._link
+
+    def mode_text(self, heartbeat: Heartbeat | None = None) -> str:
+        """Flight mode of ``heartbeat`` (default: the latest), readable; ``"unknown"`` if none.
+
+        Callers that already hold a telemetry snapshot pass its heartbeat, so the
+        4 Hz loop does not take a second snapshot per vehicle.
+        """
+        hb = heartbeat if heartbeat is not None else self._link.telemetry.heartbeat
+        return "unknown" if hb is None else self._mode_name(hb.custom_mode)
+
+    def _mode_name(self, custom_mode: int) -> str:
+        """The autopilot's name for ``custom_mode``."""
+        raise NotImplementedError
 
     def arm(self) -> None:
         """MAV_CMD_COMPONENT_ARM_DISARM(1), confirmed by the HEARTBEAT."""

@@ -73,15 +73,12 @@ class ArduPilotProfile(ProfileBase):
         """Acceleration on all three axes."""
         return SetpointKind.ACCEL
 
-    def mode_text(self) -> str:
+    def _mode_name(self, custom_mode: int) -> str:
         """ArduCopter mode name such as ``GUIDED``."""
-        hb = self.link.telemetry.heartbeat
-        if hb is None:
-            return "unknown"
         try:
-            return CopterMode(hb.custom_mode).name
+            return CopterMode(custom_mode).name
         except ValueError:
-            return f"Copter mode {hb.custom_mode}"
+            return f"Copter mode {custom_mode}"
 
     def takeoff(self, *, altitude_m: float) -> None:
         """GUIDED, arm, then NAV_TAKEOFF to ``altitude_m`` above home."""

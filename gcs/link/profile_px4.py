@@ -90,10 +90,9 @@ class Px4Profile(ProfileBase):
         """x/y acceleration with z position."""
         return SetpointKind.ACCEL_XY_POS_Z
 
-    def mode_text(self) -> str:
+    def _mode_name(self, custom_mode: int) -> str:
         """PX4 mode such as ``OFFBOARD`` or ``AUTO.LAND``."""
-        hb = self.link.telemetry.heartbeat
-        return "unknown" if hb is None else px4_mode_text(hb.custom_mode)
+        return px4_mode_text(custom_mode)
 
     def takeoff(self, *, altitude_m: float) -> None:
         """Stream a hold ``altitude_m`` above, switch to OFFBOARD, then arm."""

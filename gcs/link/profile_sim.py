@@ -35,15 +35,12 @@ class SimProfile(ProfileBase):
         """x/y acceleration with z position (the vehicle holds altitude itself)."""
         return SetpointKind.ACCEL_XY_POS_Z
 
-    def mode_text(self) -> str:
-        """Current :class:`SimMode` name."""
-        hb = self.link.telemetry.heartbeat
-        if hb is None:
-            return "unknown"
+    def _mode_name(self, custom_mode: int) -> str:
+        """:class:`SimMode` name."""
         try:
-            return SimMode(hb.custom_mode).name
+            return SimMode(custom_mode).name
         except ValueError:
-            return f"sim mode {hb.custom_mode}"
+            return f"sim mode {custom_mode}"
 
     def takeoff(self, *, altitude_m: float) -> None:
         """Arm, then NAV_TAKEOFF(param7 = ``altitude_m``); confirmed by TAKEOFF or HOLD."""
