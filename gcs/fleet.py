@@ -42,32 +42,52 @@ class FleetState:
 
 def read_fleet(ids: Sequence[int], profiles: Mapping[int, AutopilotProfile],
                now: float) -> FleetState:
-    """Snapshot every vehicle's telemetry at loop time ``now``."""
-    n = len(ids)
-    p = np.full((n, 3), np.nan)
-    v = np.full((n, 3), np.nan)
-    yaw = np.zeros(n)
-    tilt = np.full(n, np.nan)
-    age = np.full(n, np.inf)
-    hb_age = np.full(n, np.inf)
-    armed = np.zeros(n, dtype=bool)
-    battery = np.full(n, np.nan)
+    """Snapshot every vehicle's telemetry at loop time ``now``.
+
+    Plain Python lists are filled and turned into arrays once: element-wise
+    writes into numpy arrays cost more than the rest of the loop.
+    """
+    nan3 = (math.nan, math.nan, math.nan)
+    p: list[tuple[float, float, float]] = []
+    v: list[tuple[float, float, float]] = []
+    yaw: list[float] = []
+    tilt: list[float] = []
+    age: list[float] = []
+    hb_age: list[float] = []
+    armed: list[bool] = []
+    battery: list[float] = []
     modes: list[str] = []
-    for i, vid in enumerate(ids):
+    for vid in ids:
         profile = profiles[vid]
         tel = profile.link.telemetry
-        if tel.position is not None:
-            p[i] = tel.position.p_ned
-            v[i] = tel.position.v_ned
-            age[i] = max(0.0, now - tel.position.received_at)
-        if tel.attitude is not None:
-            roll, pitch, yaw[i] = tel.attitude.rpy
-            tilt[i] = math.acos(max(-1.0, min(1.0, math.cos(roll) * math.cos(pitch))))
-        if tel.heartbeat is not None:
-            hb_age[i] = max(0.0, now - tel.heartbeat.received_at)
-            armed[i] = tel.heartbeat.armed
-        if tel.status is not None and tel.status.battery_remaining_pct is not None:
-            battery[i] = tel.status.battery_remaining_pct
-        modes.append(profile.mode_text(tel.heartbeat))
-    return FleetState(t=now, ids=tuple(ids), p_ned=p, v_ned=v, yaw=yaw, tilt=tilt, age=age,
-                      heartbeat_age=hb_age, armed=armed, battery=battery, modes=tuple(modes))
+        position = tel.position
+        if position is not None:
+            p.append(position.p_ned)
+            v.append(position.v_ned)
+            age.append(max(0.0, now - position.received_at))
+        else:
+            p.append(nan3)
+            v.append(nan3)
+            age.append(math.inf)
+        attitude = tel.attitude
+        if attitude is not None:
+            roll, pitch, heading = attitude.rpy
+            yaw.append(heading)
+            tilt.append(math.acos(max(-1.0, min(1.0, math.cos(roll) * math.cos(pitch)))))
+        else:
+            yaw.append(0.0)
+            tilt.append(math.nan)
+        hb = tel.heartbeat
+        hb_age.append(math.inf if hb is None else max(0.0, now - hb.received_at))
+        armed.append(hb is not None and hb.armed)
+        status = tel.status
+        remaining = None if status is None else status.battery_remaining_pct
+        battery.append(math.nan if remaining is None else remaining)
+        modes.append(profile.mode_text(hb))
+    n = len(ids)
+    return FleetState(t=now, ids=tuple(ids), p_ned=np.array(p, dtype=float).reshape(n, 3),
+                      v_ned=np.array(v, dtype=float).reshape(n, 3), yaw=np.array(yaw, dtype=float),
+                      tilt=np.array(tilt, dtype=float), age=np.array(age, dtype=float),
+                      heartbeat_age=np.array(hb_age, dtype=float),
+                      armed=np.array(armed, dtype=bool), battery=np.array(battery, dtype=float),
+                      modes=tuple(modes))

@@ -74,31 +74,36 @@ def evaluate(cfg: SafetyConfig, ids: Sequence[int], age: np.ndarray, p_ned: np.n
             centroid (the analysis' safe span / 2), m.
     """
     events: list[SafetyEvent] = []
-    land = False
-    fresh = np.isfinite(age) & (age <= cfg.stale_after) & np.all(np.isfinite(p_ned), axis=1)
-    for i, vid in enumerate(ids):
-        if age[i] > cfg.land_after:
-            land = True
+    # Masks over the whole team, then a loop over the offenders only: the loop runs
+    # every tick for up to a hundred vehicles, and nearly always finds none.
+    known = np.all(np.isfinite(p_ned), axis=1)
+    lost = age > cfg.land_after
+    fresh = np.isfinite(age) & (age <= cfg.stale_after) & known
+    for i in np.flatnonzero(lost | ~fresh):
+        vid = ids[i]
+        if lost[i]:
             events.append(SafetyEvent(SafetyReason.LOST, vid,
                                       f"vehicle {vid}: {_silent(age[i])}: landing the team"))
-        elif not fresh[i]:
+        else:
             events.append(SafetyEvent(SafetyReason.STALE, vid,
                                       f"vehicle {vid}: {_silent(age[i])}: motion frozen"))
-    if fresh.any():
-        p = p_ned[fresh]
-        fresh_ids = [vid for vid, ok in zip(ids, fresh, strict=True) if ok]
-        for vid, (x, y, z) in zip(fresh_ids, p, strict=True):
-            if max(abs(x), abs(y)) > cfg.geofence_xy or -z > cfg.geofence_altitude:
-                events.append(SafetyEvent(SafetyReason.GEOFENCE, vid,
-                                          f"vehicle {vid}: at ({x:.2f}, {y:.2f}, {-z:.2f}) m, "
-                                          f"outside the geofence: motion frozen"))
-        if fresh.all():
-            r = np.linalg.norm(p[:, :2] - p[:, :2].mean(axis=0), axis=1)
-            for vid, ri in zip(fresh_ids, r, strict=True):
-                if ri > safe_radius:
-                    events.append(SafetyEvent(SafetyReason.DEFORMATION, vid,
-                                              f"vehicle {vid}: {ri:.2f} m from the centroid, "
-                                              f"safe bound {safe_radius:.2f} m: motion frozen"))
+    with np.errstate(invalid="ignore"):  # NaN rows are not fresh and never compared
+        outside = fresh & ((np.abs(p_ned[:, :2]).max(axis=1) > cfg.geofence_xy)
+                           | (-p_ned[:, 2] > cfg.geofence_altitude))
+    for i in np.flatnonzero(outside):
+        vid, (x, y, z) = ids[i], p_ned[i]
+        events.append(SafetyEvent(SafetyReason.GEOFENCE, vid,
+                                  f"vehicle {vid}: at ({x:.2f}, {y:.2f}, {-z:.2f}) m, "
+                                  f"outside the geofence: motion frozen"))
+    if fresh.all():
+        xy = p_ned[:, :2]
+        r = np.linalg.norm(xy - xy.mean(axis=0), axis=1)
+        for i in np.flatnonzero(r > safe_radius):
+            vid = ids[i]
+            events.append(SafetyEvent(SafetyReason.DEFORMATION, vid,
+                                      f"vehicle {vid}: {r[i]:.2f} m from the centroid, "
+                                      f"safe bound {safe_radius:.2f} m: motion frozen"))
+    land = bool(lost.any())
     if not events:
         return _OK
     return SafetyVerdict(freeze=True, land=land, events=tuple(events))

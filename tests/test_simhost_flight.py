@@ -203,7 +203,9 @@ def test_team_takes_off_flies_offboard_and_a_killed_vehicle_vanishes(gcs: Gcs) -
 
 def test_cut_link_goes_silent_both_ways_until_restored(gcs: Gcs) -> None:
     manager = gcs.manager
-    eventually(lambda: 3 not in manager.missing(), "vehicle 3 present")
+    # present by its token and by its heartbeat: a cut before the first heartbeat stops nothing
+    eventually(lambda: 3 not in manager.missing() and manager.links[3].health.alive,
+               "vehicle 3 present")
     gcs.control(ControlAction.CUT, 3)
     eventually(lambda: gcs.seen(3, Presence.VANISHED, PresenceSource.HEARTBEAT) is not None,
                "vehicle 3's heartbeat to stop", timeout_s=3.0)

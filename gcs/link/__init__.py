@@ -42,8 +42,10 @@ from gcs.link.profiles import make_profile
 from gcs.link.setpoints import (
     MASK_ACCEL,
     MASK_ACCEL_XY_POS_Z,
+    SETPOINT_MESSAGE,
     AccelSetpoint,
     SetpointKind,
+    accel_setpoint_fields,
     accel_setpoint_message,
     read_setpoint,
 )
@@ -77,6 +79,7 @@ __all__ = [
     "MASK_ACCEL",
     "MASK_ACCEL_XY_POS_Z",
     "SAFETY_ARMED",
+    "SETPOINT_MESSAGE",
     "ZENOH",
     "AccelSetpoint",
     "ArduPilotProfile",
@@ -122,6 +125,7 @@ __all__ = [
     "VerticalPd",
     "ZenohSettings",
     "ZenohTransport",
+    "accel_setpoint_fields",
     "accel_setpoint_message",
     "check_links",
     "command_name",

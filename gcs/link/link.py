@@ -24,7 +24,7 @@ from gcs.link.dialect import MavMessage, mavlink, message_id
 from gcs.link.encoder import DEFAULT_GCS_COMPONENT_ID, DEFAULT_GCS_SYSTEM_ID, MavlinkEncoder
 from gcs.link.errors import CommandAck, CommandError, CommandResult, LinkError
 from gcs.link.health import LinkHealth, SequenceTracker
-from gcs.link.setpoints import accel_setpoint_message
+from gcs.link.setpoints import SETPOINT_MESSAGE, accel_setpoint_fields
 from gcs.link.signing import SigningKey
 from gcs.link.telemetry import Telemetry, TelemetryStore
 from gcs.link.transport import FrameDirection, Transport
@@ -240,9 +240,12 @@ class Link:
 
     def send_message(self, msg: MavMessage) -> None:
         """Encode (and sign) ``msg`` as the GCS and send it; non-blocking."""
+        self._send_frame(lambda: self._encoder.encode(msg))
+
+    def _send_frame(self, encode: Callable[[], bytes]) -> None:
         if self._stop.is_set():
             raise LinkError(self._sysid, "link is closed")
-        frame = self._encoder.encode(msg)
+        frame = encode()
         self._transport.send(frame)
         for listener in self._frame_listeners:
             self._call(listener, FrameDirection.OUT, frame)
@@ -254,10 +257,11 @@ class Link:
         See :mod:`gcs.link.setpoints`; which vertical channel to use is the
         autopilot profile's choice.
         """
-        self.send_message(accel_setpoint_message(
-            self._encoder.mav, target_system=self._sysid, target_component=self._target_component,
+        values = accel_setpoint_fields(
+            target_system=self._sysid, target_component=self._target_component,
             time_boot_ms=self._time_boot_ms(), accel_xy_ned=accel_xy_ned, z_ned=z_ned,
-            az_ned=az_ned))
+            az_ned=az_ned)
+        self._send_frame(lambda: self._encoder.encode_fields(SETPOINT_MESSAGE, *values))
 
     def send_timesync(self) -> None:
         """Send a TIMESYNC probe; its answer updates the round-trip time."""

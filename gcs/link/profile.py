@@ -96,6 +96,7 @@ class ProfileBase:
     def __init__(self, link: Link, *, confirm_timeout_s: float = 3.0) -> None:
         self._link = link
         self._confirm_timeout_s = confirm_timeout_s
+        self._mode_names: dict[int, str] = {}
 
     @property
     def link(self) -> Link:
@@ -109,7 +110,12 @@ class ProfileBase:
         4 Hz loop does not take a second snapshot per vehicle.
         """
         hb = heartbeat if heartbeat is not None else self._link.telemetry.heartbeat
-        return "unknown" if hb is None else self._mode_name(hb.custom_mode)
+        if hb is None:
+            return "unknown"
+        name = self._mode_names.get(hb.custom_mode)
+        if name is None:  # a handful of modes: remember their names (read per vehicle per tick)
+            name = self._mode_names[hb.custom_mode] = self._mode_name(hb.custom_mode)
+        return name
 
     def _mode_name(self, custom_mode: int) -> str:
         """The autopilot's name for ``custom_mode``."""

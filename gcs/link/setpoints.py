@@ -23,12 +23,17 @@ from gcs.link.dialect import MavMessage, mavlink
 __all__ = [
     "MASK_ACCEL",
     "MASK_ACCEL_XY_POS_Z",
+    "SETPOINT_MESSAGE",
     "AccelSetpoint",
     "SetpointKind",
     "TypeMask",
+    "accel_setpoint_fields",
     "accel_setpoint_message",
     "read_setpoint",
 ]
+
+SETPOINT_MESSAGE = mavlink.MAVLink_set_position_target_local_ned_message
+"""The pymavlink class of ``SET_POSITION_TARGET_LOCAL_NED``."""
 
 
 class TypeMask(IntFlag):
@@ -84,27 +89,41 @@ class AccelSetpoint:
     """Sender's time stamp, ms."""
 
 
-def accel_setpoint_message(mav: mavlink.MAVLink, *, target_system: int, target_component: int,
-                           time_boot_ms: int, accel_xy_ned: tuple[float, float],
-                           z_ned: float | None = None, az_ned: float | None = None) -> MavMessage:
+def accel_setpoint_fields(*, target_system: int, target_component: int, time_boot_ms: int,
+                          accel_xy_ned: tuple[float, float], z_ned: float | None = None,
+                          az_ned: float | None = None) -> tuple[float, ...]:
     """``SET_POSITION_TARGET_LOCAL_NED`` with x/y acceleration and exactly one vertical channel.
 
     ``z_ned`` (m, down) selects :data:`MASK_ACCEL_XY_POS_Z`; ``az_ned`` (m/s^2,
-    down, gravity excluded) selects :data:`MASK_ACCEL`.
+    down, gravity excluded) selects :data:`MASK_ACCEL`. Returns the field values
+    in wire order (``SETPOINT_MESSAGE.ordered_fieldnames``), for
+    :meth:`gcs.link.encoder.MavlinkEncoder.encode_fields`.
     """
     if (z_ned is None) == (az_ned is None):
         raise ValueError("give exactly one vertical channel: z_ned or az_ned")
-    ax, ay = (float(a) for a in accel_xy_ned)
+    ax, ay = float(accel_xy_ned[0]), float(accel_xy_ned[1])
     vertical = float(z_ned if z_ned is not None else az_ned)  # type: ignore[arg-type]
-    if not all(math.isfinite(v) for v in (ax, ay, vertical)):
+    if not (math.isfinite(ax) and math.isfinite(ay) and math.isfinite(vertical)):
         raise ValueError(f"setpoint must be finite, got a=({ax}, {ay}) vertical={vertical}")
     if z_ned is not None:
         mask, z, az = MASK_ACCEL_XY_POS_Z, vertical, 0.0
     else:
         mask, z, az = MASK_ACCEL, 0.0, vertical
-    return mav.set_position_target_local_ned_encode(
-        time_boot_ms & 0xFFFFFFFF, target_system, target_component,
-        mavlink.MAV_FRAME_LOCAL_NED, mask, 0.0, 0.0, z, 0.0, 0.0, 0.0, ax, ay, az, 0.0, 0.0)
+    return (time_boot_ms & 0xFFFFFFFF, 0.0, 0.0, z, 0.0, 0.0, 0.0, ax, ay, az, 0.0, 0.0, mask,
+            target_system, target_component, mavlink.MAV_FRAME_LOCAL_NED)
+
+
+def accel_setpoint_message(mav: mavlink.MAVLink, *, target_system: int, target_component: int,
+                           time_boot_ms: int, accel_xy_ned: tuple[float, float],
+                           z_ned: float | None = None, az_ned: float | None = None) -> MavMessage:
+    """The message of :func:`accel_setpoint_fields` as a pymavlink object (for ``mav``)."""
+    del mav  # the message needs no sender; kept so callers read like the *_encode factories
+    values = accel_setpoint_fields(target_system=target_system,
+                                   target_component=target_component,
+                                   time_boot_ms=time_boot_ms, accel_xy_ned=accel_xy_ned,
+                                   z_ned=z_ned, az_ned=az_ned)
+    return SETPOINT_MESSAGE(**dict(zip(SETPOINT_MESSAGE.ordered_fieldnames, values,
+                                       strict=True)))
 
 
 def read_setpoint(msg: MavMessage) -> AccelSetpoint | None:
