@@ -74,7 +74,8 @@ class RuntimeSnapshot:
     accel_cmd: np.ndarray  # (n, 2) NED m/s^2 sent this tick (zeros when not streaming)
     distance_errors: np.ndarray  # (m,) m, NaN while unknown
     safety: SafetyVerdict
-    compute_time: float  # s, this tick (Runtime.stats() has the percentiles)
+    compute_time: float  # s of wall time, this tick (Runtime.stats() has the percentiles)
+    compute_cpu: float = 0.0  # s of this thread's CPU time, this tick (excludes preemption)
     events: tuple[Event, ...] = field(default=())
     truth: SimTruth | None = None  # simulation only: the ground truth of this tick
 
@@ -288,7 +289,7 @@ class Runtime:
 
     def tick(self) -> RuntimeSnapshot:
         """One guidance tick; never raises for a vehicle's fault."""
-        started = time.perf_counter()
+        started, started_cpu = time.perf_counter(), time.thread_time()
         now = self.clock.now()
         fleet = read_fleet(self.ids, self.profiles, now)
         if self.phase is Phase.CONNECT:  # presence is the pre-flight check's business
@@ -328,10 +329,12 @@ class Runtime:
                                     sticks=(demand.forward, demand.right, demand.rotate),
                                     scale=demand.scale, altitude=op.altitude, phase=int(phase))
         self._compute.append(time.perf_counter() - started)
+        cpu = time.thread_time() - started_cpu
         self._ticks += 1
         snap = RuntimeSnapshot(fleet=fleet, phase=phase, operator=op, demand=demand,
                                accel_cmd=accel, distance_errors=errors, safety=verdict,
-                               compute_time=self._compute[-1], events=self.events()[-20:],
+                               compute_time=self._compute[-1], compute_cpu=cpu,
+                               events=self.events()[-20:],
                                truth=truth)
         self._snapshot = snap
         for listener in self._listeners:

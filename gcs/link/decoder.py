@@ -2,9 +2,10 @@
 
 Frames are found by their start byte and header, checked (checksum with the
 message's CRC_EXTRA, then the signature on a signed link) and only then
-unpacked by pymavlink. A candidate that fails its checksum costs one byte:
-scanning resumes right after its start byte, so a spurious start byte in
-noise never swallows the real frame behind it.
+unpacked (:mod:`gcs.link.unpack` for scalar-only types, pymavlink for the
+rest). A candidate that fails its checksum costs one byte: scanning resumes
+right after its start byte, so a spurious start byte in noise never swallows
+the real frame behind it.
 
 Two modes: a *stream* (serial, TCP) keeps an incomplete tail for the next
 chunk; a *datagram* source (UDP, zenoh) delivers whole frames per payload, so
@@ -17,8 +18,10 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from gcs.link.crc import frame_crc
 from gcs.link.dialect import MavMessage, mavlink
 from gcs.link.signing import SIGNATURE_LEN, SignatureCheck, SignatureVerifier, SigningKey
+from gcs.link.unpack import unpack_v2
 
 __all__ = ["DecodeStats", "FrameDecoder"]
 
@@ -28,7 +31,6 @@ _HEADER_V2 = 10
 _HEADER_V1 = 6
 _IFLAG_SIGNED = 0x01
 _MSG_MAP = mavlink.mavlink_map
-_X25 = mavlink.x25crc
 
 
 @dataclass(frozen=True)
@@ -179,9 +181,8 @@ class FrameDecoder:
                     self._bad_crc += 1
                     i += 1
                 continue
-            crc = _X25(buf[i + 1:crc_end - 2])
-            crc.accumulate(bytes((cls.crc_extra,)))
-            if crc.crc != buf[crc_end - 2] | (buf[crc_end - 1] << 8):
+            if frame_crc(buf[i + 1:crc_end - 2], cls.crc_extra) != \
+                    buf[crc_end - 2] | (buf[crc_end - 1] << 8):
                 self._bad_crc += 1
                 i += 1
                 continue
@@ -196,7 +197,10 @@ class FrameDecoder:
                         self._bad_sig += 1
                     continue
             try:
-                msg = self._unpacker.decode(frame)
+                msg = unpack_v2(frame, msgid=msgid, signature_len=SIGNATURE_LEN if signed
+                                else 0) if v2 else None
+                if msg is None:
+                    msg = self._unpacker.decode(frame)
             except Exception:  # pymavlink raises several types on odd payloads
                 self._malformed += 1
                 continue
@@ -251,9 +255,8 @@ def _valid_frame_after(buf: bytes | bytearray, start: int) -> bool:
             cls = _MSG_MAP.get(msgid)
             crc_end = j + header + buf[j + 1] + 2
             end = crc_end + (SIGNATURE_LEN if flags & _IFLAG_SIGNED else 0)
-            if cls is not None and not flags & ~_IFLAG_SIGNED and end <= n:
-                crc = _X25(buf[j + 1:crc_end - 2])
-                crc.accumulate(bytes((cls.crc_extra,)))
-                if crc.crc == buf[crc_end - 2] | (buf[crc_end - 1] << 8):
-                    return True
+            if cls is not None and not flags & ~_IFLAG_SIGNED and end <= n and frame_crc(
+                    buf[j + 1:crc_end - 2], cls.crc_extra) == \
+                    buf[crc_end - 2] | (buf[crc_end - 1] << 8):
+                return True
         j += 1

@@ -14,6 +14,7 @@ import threading
 import time
 from collections.abc import Callable
 
+from gcs.link.crc import frame_crc
 from gcs.link.dialect import MavMessage, mavlink
 from gcs.link.signing import SigningKey, signing_timestamp
 
@@ -27,16 +28,6 @@ _CRC = struct.Struct("<H")
 _SIGNATURE_STAMP = struct.Struct("<BQ")
 _IFLAG_SIGNED = mavlink.MAVLINK_IFLAG_SIGNED
 
-
-_FAST_CRC = getattr(mavlink, "mcrf4xx", None)
-"""fastcrc's CRC-16/MCRF4XX when installed (pymavlink uses it too); pure Python otherwise."""
-
-
-def _crc16(data: bytes) -> int:
-    """MAVLink's CRC-16/MCRF4XX of ``data``."""
-    if _FAST_CRC is not None:
-        return int(_FAST_CRC(data, 0xFFFF))
-    return int(mavlink.x25crc(data).crc)
 
 DEFAULT_GCS_COMPONENT_ID = mavlink.MAV_COMP_ID_MISSIONPLANNER
 """The GCS's component id (190, ``MAV_COMP_ID_MISSIONPLANNER``, a ground station)."""
@@ -109,7 +100,7 @@ class MavlinkEncoder:
                                 _IFLAG_SIGNED if signed else 0, 0, mav.seq, mav.srcSystem,
                                 mav.srcComponent, msgid & 0xFFFF, msgid >> 16)
             frame = head + payload
-            frame += _CRC.pack(_crc16(frame[1:] + bytes((message_type.crc_extra,))))
+            frame += _CRC.pack(frame_crc(frame[1:], message_type.crc_extra))
             if signed:
                 signing = mav.signing
                 signing.timestamp = max(signing.timestamp,
