@@ -305,3 +305,36 @@ def test_manager_reports_presence_and_names_missing_vehicles(fabric: Fabric) -> 
         manager.close()
         vehicle.close()
         stranger.close()
+
+
+def test_one_thread_sends_every_links_heartbeat_spread_over_the_period(fabric: Fabric) -> None:
+    """Twenty links: no thread per link, each vehicle hears the GCS at the configured rate."""
+    ids = list(range(21, 41))
+    heard: dict[int, list[float]] = {sysid: [] for sysid in ids}
+    decoders = {sysid: FrameDecoder(datagram=True) for sysid in ids}
+
+    def listen(sysid: int) -> Callable[[zenoh.Sample], None]:
+        def on_sample(sample: zenoh.Sample) -> None:
+            for msg in decoders[sysid].feed(sample.payload.to_bytes()):
+                if msg.get_type() == "HEARTBEAT" and msg.type == v20.MAV_TYPE_GCS:
+                    heard[sysid].append(time.monotonic())
+        return on_sample
+
+    subs = [fabric.sim.declare_subscriber(keys.mavlink(FLEET, sysid, keys.Direction.TO_VEHICLE),
+                                          listen(sysid)) for sysid in ids]
+    before = threading.active_count()
+    settings = GcsLinkConfig(fleet=FLEET, heartbeat_period_s=0.5, timesync_period_s=0.0)
+    manager = LinkManager([LinkConfig(sysid=s) for s in ids], settings=settings,
+                          session=fabric.gcs, check_period_s=0.02)
+    try:
+        # the manager's own thread, and zenoh-python's one per callback subscriber
+        assert threading.active_count() - before <= 1 + len(ids) + 1
+        time.sleep(2.2)
+    finally:
+        manager.close()
+        for sub in subs:
+            sub.undeclare()
+    counts = [len(heard[s]) for s in ids]
+    assert min(counts) >= 3 and max(counts) <= 6, counts  # 0.5 s period over 2.2 s
+    firsts = sorted(heard[s][0] for s in ids)
+    assert firsts[-1] - firsts[0] > 0.3  # spread over the period, not one burst

@@ -14,6 +14,7 @@ them; they are serialised per link.
 from __future__ import annotations
 
 import logging
+import math
 import threading
 import time
 from collections import deque
@@ -69,7 +70,8 @@ class Link:
                  command_timeout_s: float = 1.0, command_retries: int = 2,
                  command_in_progress_timeout_s: float = 10.0,
                  heartbeat_timeout_s: float = 3.0,
-                 gcs_heartbeat_period_s: float = 1.0, timesync_period_s: float = 1.0) -> None:
+                 gcs_heartbeat_period_s: float = 1.0, timesync_period_s: float = 1.0,
+                 service_offset_s: float = 0.0) -> None:
         if isinstance(sysid, bool) or not isinstance(sysid, int) or not 1 <= sysid <= 255:
             raise ValueError(f"vehicle system id must be an integer 1..255, got {sysid!r}")
         if sysid == gcs_system_id:
@@ -91,6 +93,7 @@ class Link:
         self._heartbeat_period_s = gcs_heartbeat_period_s
         self._timesync_period_s = timesync_period_s
         self._t0 = time.monotonic()
+        self._next_heartbeat = self._next_timesync = self._t0 + service_offset_s
 
         self._rx_lock = threading.Lock()  # the decoder; held only while decoding
         self._cond = threading.Condition()  # everything below
@@ -112,13 +115,18 @@ class Link:
 
     # -- life cycle -----------------------------------------------------------------------
 
-    def start(self) -> Link:
-        """Start receiving and the background HEARTBEAT/TIMESYNC; returns self."""
+    def start(self, *, background: bool = True) -> Link:
+        """Start receiving and the periodic HEARTBEAT/TIMESYNC; returns self.
+
+        ``background=False`` leaves the periodic frames to the caller, who calls
+        :meth:`service` now and then (a manager of a hundred links runs one
+        thread for all of them instead of a hundred threads waking together).
+        """
         if self._started:
             raise LinkError(self._sysid, "link already started")
         self._started = True
         self._transport.start(self._on_bytes)
-        if self._heartbeat_period_s > 0 or self._timesync_period_s > 0:
+        if background and (self._heartbeat_period_s > 0 or self._timesync_period_s > 0):
             self._service = threading.Thread(target=self._service_loop, daemon=True,
                                              name=f"link-{self._sysid}-service")
             self._service.start()
@@ -412,24 +420,33 @@ class Link:
 
     # -- background -----------------------------------------------------------------------------
 
+    def service(self, now: float | None = None) -> float:
+        """Send the HEARTBEAT and TIMESYNC that are due; the next due time (monotonic s).
+
+        Returns ``inf`` when neither is configured or the link is closed.
+        """
+        now = time.monotonic() if now is None else now
+        try:
+            if self._heartbeat_period_s > 0 and now >= self._next_heartbeat:
+                self.send_message(self._encoder.mav.heartbeat_encode(
+                    mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0,
+                    mavlink.MAV_STATE_ACTIVE))
+                self._next_heartbeat = now + self._heartbeat_period_s
+            if self._timesync_period_s > 0 and now >= self._next_timesync:
+                self.send_timesync()
+                self._next_timesync = now + self._timesync_period_s
+        except LinkError:
+            return math.inf  # closed meanwhile
+        return min((t for t, period in ((self._next_heartbeat, self._heartbeat_period_s),
+                                        (self._next_timesync, self._timesync_period_s))
+                    if period > 0), default=math.inf)
+
     def _service_loop(self) -> None:
-        next_heartbeat = next_timesync = time.monotonic()
         while not self._stop.is_set():
-            now = time.monotonic()
-            try:
-                if self._heartbeat_period_s > 0 and now >= next_heartbeat:
-                    self.send_message(self._encoder.mav.heartbeat_encode(
-                        mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0,
-                        mavlink.MAV_STATE_ACTIVE))
-                    next_heartbeat = now + self._heartbeat_period_s
-                if self._timesync_period_s > 0 and now >= next_timesync:
-                    self.send_timesync()
-                    next_timesync = now + self._timesync_period_s
-            except LinkError:
-                break  # closed meanwhile
-            waits = [t for t, period in ((next_heartbeat, self._heartbeat_period_s),
-                                         (next_timesync, self._timesync_period_s)) if period > 0]
-            self._stop.wait(max(0.0, min(waits) - time.monotonic()))
+            due = self.service()
+            if math.isinf(due):
+                return
+            self._stop.wait(max(0.0, due - time.monotonic()))
 
     def _time_boot_ms(self) -> int:
         return int((time.monotonic() - self._t0) * 1000.0)

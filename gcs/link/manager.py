@@ -33,7 +33,11 @@ __all__ = ["LinkManager"]
 
 
 class LinkManager:
-    """Opens every configured link at construction; use as a context manager or call close()."""
+    """Opens every configured link at construction; use as a context manager or call close().
+
+    One thread checks presence and sends every link's periodic HEARTBEAT and
+    TIMESYNC (:meth:`Link.service`), however many links there are.
+    """
 
     def __init__(self, links: Sequence[LinkConfig], *, settings: GcsLinkConfig | None = None,
                  base_dir: str | Path = ".", session: zenoh.Session | None = None,
@@ -65,8 +69,13 @@ class LinkManager:
                     self._session, fleet=self._settings.fleet,
                     on_change=lambda sysid, up: self.discovery.report(
                         sysid, up, PresenceSource.LIVELINESS))
-            for config in links:
-                link = self._open(config, keys[config.sysid])
+            # One thread sends every link's HEARTBEAT and TIMESYNC (the check loop), their
+            # phases spread over the period so a hundred links do not send in one burst.
+            periods = [p for p in (self._settings.heartbeat_period_s,
+                                   self._settings.timesync_period_s) if p > 0]
+            spread = min(periods, default=0.0) / max(1, len(links))
+            for k, config in enumerate(links):
+                link = self._open(config, keys[config.sysid], service_offset_s=k * spread)
                 self._links[config.sysid] = link
                 self._profiles[config.sysid] = make_profile(config.profile, link)
         except BaseException:
@@ -120,7 +129,8 @@ class LinkManager:
         path = config.signing_key_path(self._base_dir)
         return load_signing_key(path) if path is not None else None
 
-    def _open(self, config: LinkConfig, key: SigningKey | None) -> Link:
+    def _open(self, config: LinkConfig, key: SigningKey | None, *,
+              service_offset_s: float) -> Link:
         transport: Transport
         if config.transport == ZENOH:
             assert self._session is not None
@@ -140,13 +150,16 @@ class LinkManager:
                         command_retries=config.command_retries,
                         heartbeat_timeout_s=config.heartbeat_timeout_s,
                         gcs_heartbeat_period_s=self._settings.heartbeat_period_s,
-                        timesync_period_s=self._settings.timesync_period_s)
-            return link.start()
+                        timesync_period_s=self._settings.timesync_period_s,
+                        service_offset_s=service_offset_s)
+            return link.start(background=False)
         except BaseException:
             transport.close()
             raise
 
     def _check_loop(self) -> None:
         while not self._stop.wait(self._check_period_s):
+            now = time.monotonic()
             for sysid, link in list(self._links.items()):
+                link.service(now)
                 self.discovery.report(sysid, link.health.alive, PresenceSource.HEARTBEAT)
