@@ -10,9 +10,10 @@ keeps running its physics at real-time speed (4 vehicles, full telemetry)
 meanwhile. The setpoints go to a disarmed vehicle, which accepts and echoes
 them without flying.
 
-For scale on a shared machine it first measures the floor: the same number
-of bare zenoh round trips between this process and a minimal echo process
-(one Python callback each way, no MAVLink, no simulation).
+For scale on a shared machine it measures the floor at the same moments:
+each setpoint round trip is followed by a bare zenoh round trip between this
+process and a minimal echo process (one Python callback each way, no
+MAVLink, no simulation), so both see the same load.
 
 Prints summary lines, then one JSON object on the last line::
 
@@ -25,15 +26,18 @@ Prints summary lines, then one JSON object on the last line::
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import socket
 import subprocess
 import sys
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+import zenoh
 
 from gcs.link import Link, MavMessage, ZenohSettings, ZenohTransport, open_session
 
@@ -80,61 +84,65 @@ class _Echoes:
             self.event.set()
 
 
-def _round_trips(link: Link, count: int) -> np.ndarray:
+class _Pongs:
+    """Wakes the sender when the bare echo process answers."""
+
+    def __init__(self) -> None:
+        self.event = threading.Event()
+
+    def on_sample(self, _sample: object) -> None:
+        self.event.set()
+
+
+def _timed(send: Callable[[], None], event: threading.Event, what: str) -> float:
+    event.clear()
+    start = time.perf_counter()
+    send()
+    if not event.wait(_TIMEOUT_S):
+        raise RuntimeError(f"no answer to {what} within {_TIMEOUT_S} s")
+    return time.perf_counter() - start
+
+
+def _round_trips(link: Link, ping: zenoh.Publisher, pongs: _Pongs,
+                 count: int) -> tuple[np.ndarray, np.ndarray]:
+    """Setpoint round trips and bare zenoh round trips, interleaved one for one (ms).
+
+    Interleaving puts both under the same machine load at the same moments, so
+    the floor is the floor of these very samples.
+    """
     echoes = _Echoes()
     link.add_message_listener(echoes.on_message)
-    out = np.empty(count)
+    payload = bytes(60)
+    setpoints, floor = np.empty(count), np.empty(count)
     for k in range(-_WARMUP, count):
         tag = k % 1000  # afy = tag / 1000 m/s^2 identifies the echo (float32 keeps it exact)
         echoes.expected = tag
-        echoes.event.clear()
-        start = time.perf_counter()
-        link.send_setpoint(accel_xy_ned=(0.0, tag / 1000.0), z_ned=-1.0)
-        if not echoes.event.wait(_TIMEOUT_S):
-            raise RuntimeError(f"no echo of setpoint {k} within {_TIMEOUT_S} s")
+        rtt = _timed(functools.partial(link.send_setpoint, accel_xy_ned=(0.0, tag / 1000.0),
+                                       z_ned=-1.0), echoes.event, f"setpoint {k}")
+        bare = _timed(lambda: ping.put(payload), pongs.event, f"ping {k}")
         if k >= 0:
-            out[k] = time.perf_counter() - start
-    return out * 1000.0
+            setpoints[k], floor[k] = rtt, bare
+    return setpoints * 1000.0, floor * 1000.0
 
 
-def _zenoh_floor(count: int) -> np.ndarray:
-    """Round trips (ms) of a 60-byte payload to the echo process and back."""
-    endpoint = f"tcp/127.0.0.1:{_free_port()}"
-    echo = subprocess.Popen([sys.executable, "-c", _ECHO, endpoint], cwd=_ROOT,
-                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+def _start(args: list[str], ready_prefix: str, what: str) -> tuple[subprocess.Popen[str], str]:
+    proc = subprocess.Popen(args, cwd=_ROOT, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                            stderr=subprocess.DEVNULL, text=True)
+    assert proc.stdout is not None
+    line = proc.stdout.readline().strip()
+    if not line.startswith(ready_prefix):
+        proc.kill()
+        raise RuntimeError(f"{what} did not start (exit {proc.poll()})")
+    return proc, line
+
+
+def _stop(proc: subprocess.Popen[str]) -> None:
+    proc.terminate()
     try:
-        assert echo.stdout is not None and echo.stdin is not None
-        if echo.stdout.readline().strip() != "ready":
-            raise RuntimeError(f"echo process did not start (exit {echo.poll()})")
-        session = open_session(ZenohSettings(connect=(endpoint,)))
-        got = threading.Event()
-        pong = session.declare_subscriber("bench/pong", lambda _: got.set())
-        ping = session.declare_publisher("bench/ping", express=True)
-        try:
-            payload = bytes(60)
-            while not got.is_set():  # until the route is up
-                ping.put(payload)
-                got.wait(0.05)
-            out = np.empty(count)
-            for k in range(-_WARMUP, count):
-                got.clear()
-                start = time.perf_counter()
-                ping.put(payload)
-                if not got.wait(_TIMEOUT_S):
-                    raise RuntimeError(f"no echo of ping {k} within {_TIMEOUT_S} s")
-                if k >= 0:
-                    out[k] = time.perf_counter() - start
-        finally:
-            pong.undeclare()
-            ping.undeclare()
-            session.close()
-        echo.stdin.close()
-        echo.wait(timeout=10.0)
-    finally:
-        if echo.poll() is None:
-            echo.kill()
-            echo.wait()
-    return out * 1000.0
+        proc.wait(timeout=10.0)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
 
 
 def main() -> int:
@@ -144,32 +152,37 @@ def main() -> int:
     parser.add_argument("--config", default=str(_ROOT / "configs" / "bebop_square.yaml"),
                         help="team file for the sim host")
     args = parser.parse_args()
-    floor = _zenoh_floor(args.count)
-    endpoint = f"tcp/127.0.0.1:{_free_port()}"
-    sim = subprocess.Popen(
-        [sys.executable, "-m", "sim", "--config", args.config, "--listen", endpoint,
-         "--fleet", _FLEET], cwd=_ROOT, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
-        text=True)
+    sim_endpoint = f"tcp/127.0.0.1:{_free_port()}"
+    echo_endpoint = f"tcp/127.0.0.1:{_free_port()}"
+    sim, ready = _start([sys.executable, "-m", "sim", "--config", args.config, "--listen",
+                         sim_endpoint, "--fleet", _FLEET], "sim ready:", "sim host")
     try:
-        assert sim.stdout is not None
-        ready = sim.stdout.readline().strip()
-        if not ready.startswith("sim ready:"):
-            raise RuntimeError(f"sim host did not start (exit {sim.poll()})")
-        session = open_session(ZenohSettings(connect=(endpoint,)))
+        echo, _ = _start([sys.executable, "-c", _ECHO, echo_endpoint], "ready", "echo process")
         try:
-            link = Link(_SYSID, ZenohTransport.for_gcs(session, fleet=_FLEET, sysid=_SYSID),
-                        gcs_heartbeat_period_s=0.0, timesync_period_s=0.0).start()
+            session = open_session(ZenohSettings(connect=(sim_endpoint, echo_endpoint)))
+            pongs = _Pongs()
+            pong = session.declare_subscriber("bench/pong", pongs.on_sample)
+            ping = session.declare_publisher("bench/ping", express=True)
             try:
-                link.wait_for(lambda t: t.heartbeat is not None, timeout_s=10.0,
-                              what="the first HEARTBEAT")
-                ms = _round_trips(link, args.count)
+                while not pongs.event.is_set():  # until the route to the echo is up
+                    ping.put(bytes(60))
+                    pongs.event.wait(0.05)
+                link = Link(_SYSID, ZenohTransport.for_gcs(session, fleet=_FLEET, sysid=_SYSID),
+                            gcs_heartbeat_period_s=0.0, timesync_period_s=0.0).start()
+                try:
+                    link.wait_for(lambda t: t.heartbeat is not None, timeout_s=10.0,
+                                  what="the first HEARTBEAT")
+                    ms, floor = _round_trips(link, ping, pongs, args.count)
+                finally:
+                    link.close()
             finally:
-                link.close()
+                pong.undeclare()
+                ping.undeclare()
+                session.close()
         finally:
-            session.close()
+            _stop(echo)
     finally:
-        sim.terminate()
-        sim.wait(timeout=10.0)
+        _stop(sim)
     p50, p99 = np.percentile(ms, [50.0, 99.0])
     f50, f99 = np.percentile(floor, [50.0, 99.0])
     print(f"{ready}\nbare zenoh round trip (floor): p50 {f50:.3f} ms, p99 {f99:.3f} ms\n"

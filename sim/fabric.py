@@ -16,7 +16,8 @@ key                                                dir    payload
 ``fleet/<f>/sim/control``                          in     :mod:`sim.control` JSON
 =================================================  =====  ======================================
 
-Receivers run on zenoh's threads and only push events into the host's
+Receivers run on zenoh's threads: vehicle frames go to the host's
+``on_frame`` callback, everything else is pushed into its
 :class:`~sim.inbox.Inbox`.
 """
 
@@ -24,7 +25,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import zenoh
 
@@ -33,7 +34,7 @@ from gcs.link.clockwire import decode_time, encode_time
 from gcs.link.zenoh_session import ZenohSettings, open_session
 from gcs.link.zenoh_transport import ZenohTransport, declare_alive
 from gcs.simtruth import SimTruth
-from sim.inbox import ClockAck, ControlMessage, Frame, Inbox
+from sim.inbox import ClockAck, ControlMessage, Inbox
 
 __all__ = ["CONTROL_TOPIC", "TRUTH_TOPIC", "HostFabric"]
 
@@ -50,7 +51,7 @@ class _VehicleLink:
     """One vehicle's zenoh transport and liveliness token."""
 
     def __init__(self, session: zenoh.Session, fleet: str, sysid: int, index: int,
-                 inbox: Inbox) -> None:
+                 on_frame: Callable[[int, bytes], None]) -> None:
         # Frames block rather than drop: on loopback a full queue means a busy CPU, not a
         # radio, and lost telemetry would make lockstep runs differ. A peer that goes away
         # closes its link, so nothing waits on it for long.
@@ -59,7 +60,7 @@ class _VehicleLink:
             rx_key=keys.mavlink(fleet, sysid, keys.Direction.TO_VEHICLE),
             description=f"zenoh vehicle end fleet/{fleet}/vehicle/{sysid}",
             congestion=zenoh.CongestionControl.BLOCK)
-        self.transport.start(lambda data: inbox.put(Frame(index, data, None)))
+        self.transport.start(lambda data: on_frame(index, data))
         self.token: zenoh.LivelinessToken | None = declare_alive(session, fleet=fleet,
                                                                  sysid=sysid)
 
@@ -75,7 +76,8 @@ class HostFabric:
     """Opens the host's zenoh session and declares everything; :meth:`close` undoes it."""
 
     def __init__(self, settings: ZenohSettings, *, fleet: str, sysids: Sequence[int],
-                 inbox: Inbox) -> None:
+                 inbox: Inbox, on_frame: Callable[[int, bytes], None]) -> None:
+        """``on_frame(index, payload)`` runs on zenoh's threads for each vehicle's payload."""
         self._fleet = keys.check_fleet(fleet)
         self._settings = settings
         self._session = open_session(settings)
@@ -93,7 +95,7 @@ class HostFabric:
                 keys.sim(fleet, CONTROL_TOPIC),
                 lambda s: inbox.put(ControlMessage(s.payload.to_bytes()))))
             for index, sysid in enumerate(sysids):
-                self._links[index] = _VehicleLink(self._session, fleet, sysid, index, inbox)
+                self._links[index] = _VehicleLink(self._session, fleet, sysid, index, on_frame)
         except BaseException:
             self.close()
             raise

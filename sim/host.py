@@ -10,7 +10,8 @@ The loop, per chunk of :data:`CHUNK_S` of sim time:
 1. wait until the chunk may run: wall-time pacing (``speed``) and, with
    ``lockstep``, until the GCS's last clock ack is at most one guidance
    period behind; while waiting, inbound events are handled as they arrive
-   (a setpoint's echo leaves at once, not at the next chunk);
+   (a setpoint's echo has already left from the receive thread, see
+   :meth:`vehicles.endpoint.VehicleEndpoint.take`);
 2. handle every event that arrived (frames, acks, control messages);
 3. step world and autopilots in lockstep (:meth:`sim.world.World.run`);
 4. let every endpoint send what is due, publish the clock, and the ground
@@ -39,7 +40,7 @@ from gcs.simtruth import SimTruth
 from sim.config import WorldConfig
 from sim.control import ControlAction, parse_control
 from sim.fabric import HostFabric
-from sim.inbox import ClockAck, ControlMessage, Event, Frame, Inbox, Stop
+from sim.inbox import ClockAck, ControlMessage, Event, Inbox, Received, Stop
 from sim.options import HostOptions
 from sim.pacing import Pacer
 from sim.scenario import build_team
@@ -99,24 +100,24 @@ class SimHost:
         self._stopping = False
         self._next_truth = 0.0
         self._udp: UdpPorts | None = None
-        self._fabric = HostFabric(options.zenoh_settings(),
-                                  fleet=options.fleet or cfg.gcs.fleet, sysids=self._sysids,
-                                  inbox=self._inbox)
-        try:
-            if options.udp:
-                self._udp = UdpPorts(
-                    len(self._sysids), base_port=options.udp_base_port,
-                    gcs_port=options.udp_gcs_port,
-                    on_datagram=lambda k, data, peer: self._inbox.put(Frame(k, data, peer)))
-        except BaseException:
-            self._fabric.close()
-            raise
+        self._receiving = False  # set once constructed: earlier frames are dropped, as at boot
         measurements = self._world.measurements()
-        self._endpoints = [
+        self._endpoints = [  # before any receiver: frames may arrive at once
             VehicleEndpoint(self._autopilot, k, sysid=sysid, measurements=measurements,
                             send=functools.partial(self._send, k),
                             signing_key=signing_keys.get(sysid))
             for k, sysid in enumerate(self._sysids)]
+        self._fabric = HostFabric(options.zenoh_settings(),
+                                  fleet=options.fleet or cfg.gcs.fleet, sysids=self._sysids,
+                                  inbox=self._inbox, on_frame=self._receive)
+        try:
+            if options.udp:
+                self._udp = UdpPorts(len(self._sysids), base_port=options.udp_base_port,
+                                     gcs_port=options.udp_gcs_port, on_datagram=self._receive)
+        except BaseException:
+            self._fabric.close()
+            raise
+        self._receiving = True
 
     # -- facts ----------------------------------------------------------------------------------
 
@@ -227,11 +228,9 @@ class SimHost:
         """Act on one event; False if there was none."""
         if event is None:
             return False
-        if isinstance(event, Frame):
+        if isinstance(event, Received):
             if self._status[event.index] is VehicleStatus.LIVE:
-                if event.peer is not None and self._udp is not None:
-                    self._udp.learn(event.index, event.peer)
-                self._endpoints[event.index].receive(event.data, self.t)
+                self._endpoints[event.index].apply(event.inbound, self.t)
         elif isinstance(event, ClockAck):
             self._acked = max(self._acked, event.t)
         elif isinstance(event, ControlMessage):
@@ -259,6 +258,16 @@ class SimHost:
             self._fabric.drop_vehicle(k)
             self._autopilot.disarm(k, force=True)
         _log.info("vehicle %d %s at t = %.3f s", command.sysid, command.action.text, self.t)
+
+    def _receive(self, index: int, data: bytes, peer: tuple[str, int] | None = None) -> None:
+        """A payload for vehicle ``index`` (receive threads): echo now, the rest to the loop."""
+        if not self._receiving or self._status[index] is not VehicleStatus.LIVE:
+            return
+        if peer is not None and self._udp is not None:
+            self._udp.learn(index, peer)  # before the echo, which goes to learned peers
+        inbound = self._endpoints[index].take(data, self._world.t)
+        if inbound:
+            self._inbox.put(Received(index, inbound))
 
     def _send(self, index: int, frame: bytes) -> None:
         if self._status[index] is not VehicleStatus.LIVE:

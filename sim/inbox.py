@@ -1,29 +1,32 @@
 """Everything that reaches the sim host from other threads, in arrival order.
 
-Why: zenoh and UDP deliver on their own threads, but the world, the
-autopilots and the endpoints belong to the host's loop. Receivers only push
-events here; the loop takes them between chunks of physics (or while it
-waits for wall time), so inbound frames act at well-defined sim times and no
-lock guards the simulation. A :class:`queue.SimpleQueue` is used because its
-``put`` is safe even from a signal handler.
+Why: zenoh and UDP deliver on their own threads, but the world and the
+autopilots belong to the host's loop. Receivers decode and answer what needs
+no simulation state (setpoint echoes, :meth:`vehicles.endpoint.VehicleEndpoint.take`)
+and push the rest here; the loop takes it between chunks of physics (or while
+it waits for wall time), so inbound setpoints and commands act at
+well-defined sim times and no lock guards the simulation. A
+:class:`queue.SimpleQueue` is used because its ``put`` is safe even from a
+signal handler.
 """
 
 from __future__ import annotations
 
 import queue
+from collections.abc import Sequence
 from dataclasses import dataclass
 
-__all__ = ["ClockAck", "ControlMessage", "Event", "Frame", "Inbox", "Stop"]
+from vehicles.endpoint import Inbound
+
+__all__ = ["ClockAck", "ControlMessage", "Event", "Inbox", "Received", "Stop"]
 
 
 @dataclass(frozen=True, slots=True)
-class Frame:
-    """Bytes received for vehicle ``index`` (one zenoh payload or UDP datagram)."""
+class Received:
+    """What vehicle ``index``'s endpoint took from one payload and left for the loop."""
 
     index: int
-    data: bytes
-    peer: tuple[str, int] | None
-    """UDP sender address to answer to; None for zenoh."""
+    inbound: Sequence[Inbound]
 
 
 @dataclass(frozen=True, slots=True)
@@ -45,7 +48,7 @@ class Stop:
     """Leave the loop (SIGINT, SIGTERM)."""
 
 
-Event = Frame | ClockAck | ControlMessage | Stop
+Event = Received | ClockAck | ControlMessage | Stop
 
 
 class Inbox:

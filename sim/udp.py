@@ -12,8 +12,10 @@ simulated vehicle without zenoh. The convention is PX4 SITL's:
   (MAVProxy ``--master``, pymavlink ``mavlink_connection``) works for one
   vehicle, starting with the client's first heartbeat.
 
-One receiver thread serves all ports and only pushes datagrams into the
-host's inbox; peers are learned and frames sent on the host's loop thread.
+One receiver thread serves all ports and hands each datagram to the host
+(which echoes setpoints at once and queues the rest for its loop). Peers are
+learned on that thread and frames sent from any thread: a vehicle's peer list
+is replaced whole, never edited in place, so a send sees a consistent list.
 """
 
 from __future__ import annotations
@@ -91,10 +93,7 @@ class UdpPorts:
         peers = self._peers[index]
         if peers and peers[0] == peer:
             return
-        if peer in peers:
-            peers.remove(peer)
-        peers.insert(0, peer)
-        del peers[MAX_PEERS:]
+        self._peers[index] = [peer, *(p for p in peers if p != peer)][:MAX_PEERS]
 
     def send(self, index: int, frame: bytes) -> None:
         """Send one frame from vehicle ``index`` to the GCS port and every learned peer."""

@@ -19,22 +19,29 @@ contract in ``gcs/link/README.md``) lives here, between the bytes and the
 - optional MAVLink 2 signing: everything sent is signed, unsigned or wrongly
   signed frames are refused.
 
-The endpoint owns no thread and no socket: the host hands it received bytes
-(:meth:`VehicleEndpoint.receive`) and calls :meth:`VehicleEndpoint.update`
-after each chunk of physics; frames go out through the ``send`` callable.
-Not thread-safe: call it from the host's loop only.
+The endpoint owns no thread and no socket. Received bytes go through two
+steps: :meth:`VehicleEndpoint.take` runs on whatever thread received them
+(thread-safe): it decodes, checks each setpoint and sends its echo or refusal
+at once, so a setpoint's round trip never waits for a chunk of physics;
+:meth:`VehicleEndpoint.apply` runs on the host's loop between chunks and hands
+the accepted setpoints to the autopilot and answers commands, so the
+simulation changes only at well-defined sim times. :meth:`VehicleEndpoint.receive`
+does both, for single-threaded callers. The loop calls
+:meth:`VehicleEndpoint.update` after each chunk of physics; frames go out
+through the ``send`` callable, which must be thread-safe.
 """
 
 from __future__ import annotations
 
+import threading
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 from gcs.link.decoder import DecodeStats, FrameDecoder
 from gcs.link.dialect import MavMessage
 from gcs.link.encoder import MavlinkEncoder
-from gcs.link.setpoints import SetpointKind
+from gcs.link.setpoints import AccelSetpoint, SetpointKind
 from gcs.link.signing import SigningKey
 from gcs.link.telemetry import Severity
 from vehicles.autopilot import Autopilot
@@ -45,7 +52,7 @@ from vehicles.setpoint_check import Refusal, SetpointLimits, check_setpoint
 from vehicles.state import Measurements
 from vehicles.streams import DEFAULT_RATES_HZ, StreamSchedule, TelemetryMessage
 
-__all__ = ["COMPONENT_ID", "EndpointCounters", "VehicleEndpoint"]
+__all__ = ["COMPONENT_ID", "EndpointCounters", "Inbound", "VehicleEndpoint"]
 
 COMPONENT_ID = 1
 """Component id of the simulated autopilot (``MAV_COMP_ID_AUTOPILOT1``)."""
@@ -67,6 +74,10 @@ class EndpointCounters:
     """COMMAND_LONG answered."""
     setpoints_accepted: int
     setpoints_refused: int
+
+
+Inbound = AccelSetpoint | MavMessage
+"""What :meth:`VehicleEndpoint.take` leaves for the loop: an accepted setpoint or a message."""
 
 
 class VehicleEndpoint:
@@ -108,14 +119,16 @@ class VehicleEndpoint:
         self._refusal_reported: dict[Refusal, float] = {}
         self._statustext_id = 0
         self._batch: list[bytes] | None = None
-        """Frames held back during :meth:`update` to go out as one payload."""
+        """Frames held back during :meth:`update` to go out as one payload (loop thread)."""
+        self._rx_lock = threading.Lock()
+        """Decoder, counters and refusal reports: :meth:`take` runs on receive threads."""
+        self._text_lock = threading.Lock()
         self._not_for_us = 0
         self._commands = 0
         self._accepted = 0
         self._refused = 0
         self._handlers: dict[str, Callable[[MavMessage, float], None]] = {
             "COMMAND_LONG": self._command_long,
-            "SET_POSITION_TARGET_LOCAL_NED": self._setpoint,
             "TIMESYNC": self._timesync,
         }
 
@@ -126,21 +139,49 @@ class VehicleEndpoint:
 
     def counters(self) -> EndpointCounters:
         """Snapshot of the counters."""
-        return EndpointCounters(self._decoder.stats(), self._not_for_us, self._commands,
-                                self._accepted, self._refused)
+        with self._rx_lock:
+            return EndpointCounters(self._decoder.stats(), self._not_for_us, self._commands,
+                                    self._accepted, self._refused)
 
     # -- inbound --------------------------------------------------------------------------------
 
     def receive(self, data: bytes, t: float) -> None:
         """Act on the frames in ``data`` (one datagram or zenoh payload) at sim time ``t``."""
-        for msg in self._decoder.feed(data):
-            handler = self._handlers.get(msg.get_type())
-            if handler is None:
-                continue
-            if not self._addressed_to_me(msg):
-                self._not_for_us += 1
-                continue
-            handler(msg, t)
+        self.apply(self.take(data, t), t)
+
+    def take(self, data: bytes, t: float) -> list[Inbound]:
+        """Decode ``data``; echo or refuse each setpoint now; the rest for :meth:`apply`.
+
+        Thread-safe; ``t`` is the sim time the echo is stamped with.
+        """
+        out: list[Inbound] = []
+        with self._rx_lock:
+            for msg in self._decoder.feed(data):
+                kind = msg.get_type()
+                if kind != "SET_POSITION_TARGET_LOCAL_NED" and kind not in self._handlers:
+                    continue
+                if not self._addressed_to_me(msg):
+                    self._not_for_us += 1
+                elif kind == "SET_POSITION_TARGET_LOCAL_NED":
+                    setpoint = self._check(msg, t)
+                    if setpoint is not None:
+                        out.append(setpoint)
+                else:
+                    out.append(msg)
+        return out
+
+    def apply(self, inbound: Sequence[Inbound], t: float) -> None:
+        """Fly the accepted setpoints and answer the messages :meth:`take` left; loop thread."""
+        for item in inbound:
+            if isinstance(item, AccelSetpoint):
+                if item.kind is SetpointKind.ACCEL:
+                    self._autopilot.set_accel_setpoint(self._index, item.accel_ned)
+                else:
+                    assert item.z_ned is not None
+                    self._autopilot.set_accel_xy_pos_z_setpoint(self._index, item.accel_ned[:2],
+                                                                item.z_ned)
+            else:
+                self._handlers[item.get_type()](item, t)
 
     def _addressed_to_me(self, msg: MavMessage) -> bool:
         target = getattr(msg, "target_system", 0)
@@ -148,7 +189,8 @@ class VehicleEndpoint:
         return target in (0, self.sysid) and component in (0, COMPONENT_ID)
 
     def _command_long(self, msg: MavMessage, t: float) -> None:
-        self._commands += 1
+        with self._rx_lock:
+            self._commands += 1
         outcome = execute_command(msg, self._autopilot, self._index, self._streams, t)
         self._emit(self._encoder.mav.command_ack_encode(
             msg.command, int(outcome.result), 0, 0, msg.get_srcSystem(), msg.get_srcComponent()))
@@ -156,7 +198,8 @@ class VehicleEndpoint:
             self._status_text(Severity.WARNING, outcome.reason)
         self._heartbeat_if_mode_changed(t)
 
-    def _setpoint(self, msg: MavMessage, t: float) -> None:
+    def _check(self, msg: MavMessage, t: float) -> AccelSetpoint | None:
+        """Echo an acceptable setpoint at once and return it; refuse (and report) the rest."""
         verdict = check_setpoint(msg, self._limits)
         setpoint = verdict.setpoint
         if setpoint is None:
@@ -165,19 +208,14 @@ class VehicleEndpoint:
             last = self._refusal_reported.get(verdict.refusal)
             if last is None or t - last >= _REFUSAL_REPORT_PERIOD:
                 self._refusal_reported[verdict.refusal] = t
-                self._status_text(Severity.WARNING, verdict.text)
-            return
+                self._status_text(Severity.WARNING, verdict.text, now=True)
+            return None
         self._accepted += 1
-        # The echo first: the checks passed, so the autopilot takes it (and the GCS waits).
-        self._emit(self._encoder.mav.position_target_local_ned_encode(
+        # The checks passed, so the autopilot takes it at the next chunk: echo now.
+        self._send(self._encoder.encode(self._encoder.mav.position_target_local_ned_encode(
             time_boot_ms(t), msg.coordinate_frame, msg.type_mask, msg.x, msg.y, msg.z, msg.vx,
-            msg.vy, msg.vz, msg.afx, msg.afy, msg.afz, msg.yaw, msg.yaw_rate))
-        if setpoint.kind is SetpointKind.ACCEL:
-            self._autopilot.set_accel_setpoint(self._index, setpoint.accel_ned)
-        else:
-            assert setpoint.z_ned is not None
-            self._autopilot.set_accel_xy_pos_z_setpoint(self._index, setpoint.accel_ned[:2],
-                                                        setpoint.z_ned)
+            msg.vy, msg.vz, msg.afx, msg.afy, msg.afz, msg.yaw, msg.yaw_rate)))
+        return setpoint
 
     def _timesync(self, msg: MavMessage, t: float) -> None:
         if msg.tc1 == 0:  # a probe; non-zero tc1 is someone's answer, not for us
@@ -222,26 +260,37 @@ class VehicleEndpoint:
     def _view(self, t: float, *, with_comm: bool) -> VehicleView:
         comm = None
         if with_comm:  # only SYS_STATUS reads them; a snapshot of the decoder is not free
-            stats = self._decoder.stats()
-            comm = CommCounters(frames=stats.frames, dropped=stats.dropped,
-                                not_for_us=self._not_for_us, garbage_bytes=stats.garbage_bytes,
-                                setpoints_refused=self._refused)
+            c = self.counters()
+            comm = CommCounters(frames=c.decode.frames, dropped=c.decode.dropped,
+                                not_for_us=c.not_for_us, garbage_bytes=c.decode.garbage_bytes,
+                                setpoints_refused=c.setpoints_refused)
         return VehicleView(self._autopilot, self._index, self._measurements,
                            self._battery.reading(), comm, t)
 
-    def _status_text(self, severity: Severity, text: str) -> None:
-        """STATUSTEXT, split into MAVLink 2 chunks (same id, rising chunk_seq) when long."""
+    def _status_text(self, severity: Severity, text: str, *, now: bool = False) -> None:
+        """STATUSTEXT, split into MAVLink 2 chunks (same id, rising chunk_seq) when long.
+
+        ``now``: send at once, never into the loop's batch (from a receive thread).
+        """
         data = text.encode("utf-8")
+        mav = self._encoder.mav
         if len(data) <= _STATUSTEXT_LEN:
-            self._emit(self._encoder.mav.statustext_encode(int(severity), data))
-            return
-        self._statustext_id = self._statustext_id % 0xFFFF + 1
-        # A final chunk shorter than 50 bytes (possibly empty) tells receivers the text ended.
-        for seq, start in enumerate(range(0, len(data) + 1, _STATUSTEXT_LEN)):
-            self._emit(self._encoder.mav.statustext_encode(
-                int(severity), data[start:start + _STATUSTEXT_LEN], self._statustext_id, seq))
+            messages = [mav.statustext_encode(int(severity), data)]
+        else:
+            with self._text_lock:
+                self._statustext_id = text_id = self._statustext_id % 0xFFFF + 1
+            # A final chunk shorter than 50 bytes (possibly empty) tells receivers the text ended.
+            messages = [mav.statustext_encode(int(severity), data[start:start + _STATUSTEXT_LEN],
+                                              text_id, seq)
+                        for seq, start in enumerate(range(0, len(data) + 1, _STATUSTEXT_LEN))]
+        for msg in messages:
+            if now:
+                self._send(self._encoder.encode(msg))
+            else:
+                self._emit(msg)
 
     def _emit(self, msg: MavMessage) -> None:
+        """Send ``msg``, or hold it for the batch :meth:`update` is building (loop thread)."""
         frame = self._encoder.encode(msg)
         if self._batch is not None:
             self._batch.append(frame)
