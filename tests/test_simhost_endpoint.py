@@ -7,7 +7,9 @@ GCS's own decoder. Everything the GCS relies on is checked from the bytes.
 
 from __future__ import annotations
 
+import itertools
 import math
+import threading
 from collections import Counter
 from dataclasses import dataclass, field
 
@@ -378,3 +380,33 @@ def test_stream_schedule_keeps_its_rate_and_never_bursts_after_a_gap() -> None:
     assert TelemetryMessage.HEARTBEAT not in list(schedule.due(20.0))  # not asked for: never
     with pytest.raises(ValueError):
         StreamSchedule({TelemetryMessage.HEARTBEAT: -1.0})
+
+
+def test_echoes_from_a_receive_thread_keep_the_sequence_in_order() -> None:
+    """take() echoes on its own thread while the loop sends telemetry: no reordering."""
+    b = bench()
+    frame = b.gcs.encode(accel_setpoint_message(
+        b.gcs.mav, target_system=SYSID, target_component=1, time_boot_ms=0,
+        accel_xy_ned=(0.1, 0.0), z_ned=-1.0))
+    stop = threading.Event()
+    taken: list[object] = []
+
+    def receiver() -> None:
+        while not stop.is_set():
+            taken.extend(b.endpoint.take(frame, b.world.t))
+
+    thread = threading.Thread(target=receiver)
+    thread.start()
+    try:
+        b.run(1.0)  # 128 telemetry batches while setpoints pour in
+    finally:
+        stop.set()
+        thread.join()
+    messages = b.received()
+    echoes = of_type(messages, "POSITION_TARGET_LOCAL_NED")
+    assert len(echoes) == len(taken) > 50 and len(messages) > len(echoes) + 100
+    gaps = {(m2.get_seq() - m1.get_seq()) % 256 for m1, m2 in itertools.pairwise(messages)}
+    assert gaps == {1}, gaps  # in the order sent, each frame is the next number
+    b.endpoint.apply(taken, b.world.t)  # the loop flies them: the last one is the setpoint
+    assert b.autopilot.state.sp_accel_ned[0][:2].tolist() == pytest.approx([0.1, 0.0])
+    assert b.autopilot.state.sp_z_ned[0] == pytest.approx(-1.0)

@@ -118,8 +118,11 @@ class VehicleEndpoint:
         self._last_update: float | None = None
         self._refusal_reported: dict[Refusal, float] = {}
         self._statustext_id = 0
-        self._batch: list[bytes] | None = None
-        """Frames held back during :meth:`update` to go out as one payload (loop thread)."""
+        self._batch: list[MavMessage] | None = None
+        """Messages held back during :meth:`update` to go out as one payload (loop thread)."""
+        self._send_lock = threading.Lock()
+        """Sequence numbers are given at encoding: encode and send as one step, or a
+        receive thread's echo could overtake a telemetry batch and look like a loss."""
         self._rx_lock = threading.Lock()
         """Decoder, counters and refusal reports: :meth:`take` runs on receive threads."""
         self._text_lock = threading.Lock()
@@ -212,9 +215,9 @@ class VehicleEndpoint:
             return None
         self._accepted += 1
         # The checks passed, so the autopilot takes it at the next chunk: echo now.
-        self._send(self._encoder.encode(self._encoder.mav.position_target_local_ned_encode(
+        self._send_now(self._encoder.mav.position_target_local_ned_encode(
             time_boot_ms(t), msg.coordinate_frame, msg.type_mask, msg.x, msg.y, msg.z, msg.vx,
-            msg.vy, msg.vz, msg.afx, msg.afy, msg.afz, msg.yaw, msg.yaw_rate)))
+            msg.vy, msg.vz, msg.afx, msg.afy, msg.afz, msg.yaw, msg.yaw_rate))
         return setpoint
 
     def _timesync(self, msg: MavMessage, t: float) -> None:
@@ -234,8 +237,8 @@ class VehicleEndpoint:
             rotor_speed = self._autopilot.state.rotor_speed_model[self._index].tolist()
             self._battery.draw([kf * w * w for w in rotor_speed], t - self._last_update)
         self._last_update = t
-        frames: list[bytes] = []
-        self._batch = frames
+        messages: list[MavMessage] = []
+        self._batch = messages
         try:
             self._heartbeat_if_mode_changed(t)
             due = self._streams.due(t)
@@ -245,8 +248,8 @@ class VehicleEndpoint:
                     self._emit(build_report(self._encoder.mav, message, view))
         finally:
             self._batch = None
-        if frames:
-            self._send(b"".join(frames))
+        if messages:
+            self._send_now(*messages)
 
     def _heartbeat_if_mode_changed(self, t: float) -> None:
         mode = int(self._autopilot.state.mode[self._index])
@@ -283,16 +286,20 @@ class VehicleEndpoint:
             messages = [mav.statustext_encode(int(severity), data[start:start + _STATUSTEXT_LEN],
                                               text_id, seq)
                         for seq, start in enumerate(range(0, len(data) + 1, _STATUSTEXT_LEN))]
-        for msg in messages:
-            if now:
-                self._send(self._encoder.encode(msg))
-            else:
+        if now:
+            self._send_now(*messages)
+        else:
+            for msg in messages:
                 self._emit(msg)
 
     def _emit(self, msg: MavMessage) -> None:
         """Send ``msg``, or hold it for the batch :meth:`update` is building (loop thread)."""
-        frame = self._encoder.encode(msg)
         if self._batch is not None:
-            self._batch.append(frame)
+            self._batch.append(msg)
         else:
-            self._send(frame)
+            self._send_now(msg)
+
+    def _send_now(self, *messages: MavMessage) -> None:
+        """Encode ``messages`` and send them as one payload, in sequence order (any thread)."""
+        with self._send_lock:
+            self._send(b"".join(self._encoder.encode(m) for m in messages))

@@ -107,6 +107,7 @@ class Link:
         self._timesync_sent: deque[int] = deque(maxlen=16)
 
         self._command_lock = threading.Lock()
+        self._send_lock = threading.Lock()
         self._message_listeners: list[Callable[[MavMessage], None]] = []
         self._frame_listeners: list[Callable[[FrameDirection, bytes], None]] = []
         self._stop = threading.Event()
@@ -253,8 +254,11 @@ class Link:
     def _send_frame(self, encode: Callable[[], bytes]) -> None:
         if self._stop.is_set():
             raise LinkError(self._sysid, "link is closed")
-        frame = encode()
-        self._transport.send(frame)
+        # The loop, the service thread and commands all send: encoding gives the
+        # sequence number, so encode and send as one step or the vehicle sees a loss.
+        with self._send_lock:
+            frame = encode()
+            self._transport.send(frame)
         for listener in self._frame_listeners:
             self._call(listener, FrameDirection.OUT, frame)
 
