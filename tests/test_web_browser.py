@@ -82,19 +82,24 @@ class Demo:
         for line in stream:
             sink.append(line)
 
-    def centroid(self) -> np.ndarray:
-        """The team's true horizontal centroid, m (waits for a truth sample)."""
+    def sample(self, after: float = -1.0) -> SimTruth:
+        """The latest truth sample, waiting for one later than sim time ``after``.
+
+        Truth is latest-wins (dropped under load), so a reader waits for a fresh one
+        rather than assume one arrived.
+        """
         deadline = time.monotonic() + 10.0
-        while self.truth is None:
-            assert time.monotonic() < deadline, "no sim truth on zenoh"
-            time.sleep(0.05)
-        return np.asarray(self.truth.vehicle_p_ned)[:, :2].mean(axis=0)
+        while self.truth is None or self.truth.t <= after:
+            assert time.monotonic() < deadline, f"no sim truth after t = {after} s on zenoh"
+            time.sleep(0.02)
+        return self.truth
 
     def velocity(self, window: float = 0.4) -> np.ndarray:
-        """The team's true horizontal velocity over the next ``window`` seconds, m/s."""
-        start = self.centroid()
-        time.sleep(window)
-        return (self.centroid() - start) / window
+        """The team's true horizontal velocity over about ``window`` s of sim time, m/s."""
+        first = self.sample()
+        last = self.sample(after=first.t + window)
+        moved = np.asarray(last.vehicle_p_ned)[:, :2] - np.asarray(first.vehicle_p_ned)[:, :2]
+        return moved.mean(axis=0) / (last.t - first.t)
 
     def close(self) -> None:
         """Stop the demo like Ctrl-C (so it stops its simulator too); kill it if it hangs."""
