@@ -308,7 +308,7 @@ def test_manager_reports_presence_and_names_missing_vehicles(fabric: Fabric) -> 
 
 
 def test_one_thread_sends_every_links_heartbeat_spread_over_the_period(fabric: Fabric) -> None:
-    """Twenty links: no thread per link, each vehicle hears the GCS at the configured rate."""
+    """Twenty links, no thread per link: each vehicle hears the GCS at the configured rate."""
     ids = list(range(21, 41))
     heard: dict[int, list[float]] = {sysid: [] for sysid in ids}
     decoders = {sysid: FrameDecoder(datagram=True) for sysid in ids}
@@ -327,8 +327,9 @@ def test_one_thread_sends_every_links_heartbeat_spread_over_the_period(fabric: F
     manager = LinkManager([LinkConfig(sysid=s) for s in ids], settings=settings,
                           session=fabric.gcs, check_period_s=0.02)
     try:
-        # the manager's own thread, and zenoh-python's one per callback subscriber
-        assert threading.active_count() - before <= 1 + len(ids) + 1
+        # the manager's own thread, and zenoh-python's one per callback subscriber: the
+        # fleet's frames and the liveliness watch (not one per link)
+        assert threading.active_count() - before <= 3
         time.sleep(2.2)
     finally:
         manager.close()

@@ -20,6 +20,7 @@ import zenoh
 from gcs.link.config import ZENOH, GcsLinkConfig, LinkConfig, check_links
 from gcs.link.discovery import Discovery, PresenceEvent, PresenceSource
 from gcs.link.errors import LinkError
+from gcs.link.keys import Direction
 from gcs.link.link import Link
 from gcs.link.mavutil_transport import MavutilTransport
 from gcs.link.profile import AutopilotProfile
@@ -27,7 +28,7 @@ from gcs.link.profiles import make_profile
 from gcs.link.signing import SigningKey, load_signing_key
 from gcs.link.transport import Transport
 from gcs.link.zenoh_session import open_session
-from gcs.link.zenoh_transport import ZenohTransport, watch_alive
+from gcs.link.zenoh_transport import FleetReceiver, ZenohTransport, watch_alive
 
 __all__ = ["LinkManager"]
 
@@ -56,6 +57,7 @@ class LinkManager:
         self._links: dict[int, Link] = {}
         self._profiles: dict[int, AutopilotProfile] = {}
         self._watcher: zenoh.Subscriber | None = None
+        self._receiver: FleetReceiver | None = None
         self._stop = threading.Event()
         self._checker: threading.Thread | None = None
         # Configuration errors (key files) before any port or session is opened.
@@ -65,6 +67,8 @@ class LinkManager:
                 if self._session is None:
                     self._session = open_session(self._settings.zenoh)
                     self._owns_session = True
+                self._receiver = FleetReceiver(self._session, fleet=self._settings.fleet,
+                                               direction=Direction.FROM_VEHICLE)
                 self._watcher = watch_alive(
                     self._session, fleet=self._settings.fleet,
                     on_change=lambda sysid, up: self.discovery.report(
@@ -111,6 +115,9 @@ class LinkManager:
             self._checker.join(timeout=2.0)
         for link in self._links.values():
             link.close()
+        if self._receiver is not None:
+            self._receiver.close()
+            self._receiver = None
         if self._watcher is not None:
             with contextlib.suppress(zenoh.ZError):  # session already closed
                 self._watcher.undeclare()
@@ -135,7 +142,7 @@ class LinkManager:
         if config.transport == ZENOH:
             assert self._session is not None
             transport = ZenohTransport.for_gcs(self._session, fleet=self._settings.fleet,
-                                               sysid=config.sysid)
+                                               sysid=config.sysid, receiver=self._receiver)
         else:
             try:
                 transport = MavutilTransport(config.transport, baud=config.baud)

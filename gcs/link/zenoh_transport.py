@@ -23,9 +23,50 @@ import zenoh
 
 from gcs.link import keys
 
-__all__ = ["ZenohTransport", "declare_alive", "watch_alive"]
+__all__ = ["FleetReceiver", "ZenohTransport", "declare_alive", "watch_alive"]
 
 _log = logging.getLogger(__name__)
+
+
+class FleetReceiver:
+    """One subscriber for every vehicle's frames of a fleet in one direction.
+
+    Why: zenoh-python runs each callback subscriber on a Python thread of its own,
+    so a hundred links with a subscriber each are a hundred threads contending
+    for the GIL with the 4 Hz loop. This one subscriber hands each payload to the
+    transport registered for the system id in its key.
+    """
+
+    def __init__(self, session: zenoh.Session, *, fleet: str, direction: keys.Direction) -> None:
+        self._direction = direction
+        self._handlers: dict[int, Callable[[bytes], None]] = {}
+        self._subscriber: zenoh.Subscriber | None = session.declare_subscriber(
+            keys.mavlink_all(fleet, direction), self._deliver)
+
+    def register(self, sysid: int, on_bytes: Callable[[bytes], None]) -> None:
+        """Deliver vehicle ``sysid``'s payloads to ``on_bytes`` (zenoh's thread)."""
+        if sysid in self._handlers:
+            raise RuntimeError(f"vehicle {sysid} already has a receiver")
+        self._handlers = {**self._handlers, sysid: on_bytes}  # replaced whole: read lock-free
+
+    def unregister(self, sysid: int) -> None:
+        """Stop delivering vehicle ``sysid``'s payloads."""
+        self._handlers = {k: v for k, v in self._handlers.items() if k != sysid}
+
+    def close(self) -> None:
+        """Undeclare the subscriber; idempotent."""
+        sub, self._subscriber = self._subscriber, None
+        if sub is not None:
+            with contextlib.suppress(zenoh.ZError):  # session closed: nothing to undeclare
+                sub.undeclare()
+
+    def _deliver(self, sample: zenoh.Sample) -> None:
+        parsed = keys.parse_mavlink(str(sample.key_expr))
+        if parsed is None or parsed[1] is not self._direction:
+            return
+        handler = self._handlers.get(parsed[0])
+        if handler is not None:
+            handler(sample.payload.to_bytes())
 
 
 class ZenohTransport:
@@ -33,20 +74,30 @@ class ZenohTransport:
 
     def __init__(self, session: zenoh.Session, *, tx_key: str, rx_key: str,
                  description: str | None = None,
-                 congestion: zenoh.CongestionControl = zenoh.CongestionControl.DROP) -> None:
+                 congestion: zenoh.CongestionControl = zenoh.CongestionControl.DROP,
+                 receiver: FleetReceiver | None = None) -> None:
+        """``receiver``: receive through a shared :class:`FleetReceiver` (for the system
+        id in ``rx_key``) instead of a subscriber of this transport's own."""
         self._session = session
+        self._receiver = receiver
+        parsed = keys.parse_mavlink(rx_key)
+        if receiver is not None and parsed is None:
+            raise ValueError(f"{rx_key!r} is not a vehicle MAVLink key")
+        self._rx_sysid = parsed[0] if parsed is not None else None
         self._tx_key = tx_key
         self._rx_key = rx_key
         self._description = description or f"zenoh {tx_key} / {rx_key}"
         self._publisher: zenoh.Publisher | None = session.declare_publisher(
             tx_key, congestion_control=congestion, express=False)
         self._subscriber: zenoh.Subscriber | None = None
+        self._started = False
         self._lock = threading.Lock()
         self.callback_errors = 0
         """Exceptions raised by the receive callback (logged, then counted)."""
 
     @classmethod
-    def for_gcs(cls, session: zenoh.Session, *, fleet: str, sysid: int) -> ZenohTransport:
+    def for_gcs(cls, session: zenoh.Session, *, fleet: str, sysid: int,
+                receiver: FleetReceiver | None = None) -> ZenohTransport:
         """The GCS end of vehicle ``sysid``'s link.
 
         Commands and setpoints are few and must not vanish in a congested queue
@@ -56,7 +107,7 @@ class ZenohTransport:
         return cls(session, tx_key=keys.mavlink(fleet, sysid, keys.Direction.TO_VEHICLE),
                    rx_key=keys.mavlink(fleet, sysid, keys.Direction.FROM_VEHICLE),
                    description=f"zenoh fleet/{fleet}/vehicle/{sysid}",
-                   congestion=zenoh.CongestionControl.BLOCK)
+                   congestion=zenoh.CongestionControl.BLOCK, receiver=receiver)
 
     @classmethod
     def for_vehicle(cls, session: zenoh.Session, *, fleet: str, sysid: int) -> ZenohTransport:
@@ -77,17 +128,23 @@ class ZenohTransport:
 
     def start(self, on_bytes: Callable[[bytes], None]) -> None:
         """Subscribe; ``on_bytes`` runs on zenoh's callback threads."""
-        def deliver(sample: zenoh.Sample) -> None:
+        def deliver(data: bytes) -> None:
             try:
-                on_bytes(sample.payload.to_bytes())
+                on_bytes(data)
             except Exception:
                 self.callback_errors += 1
                 _log.exception("MAVLink receive callback failed on %s", self._rx_key)
 
         with self._lock:
-            if self._subscriber is not None or self._publisher is None:
+            if self._started or self._publisher is None:
                 raise RuntimeError(f"{self._description}: already started or closed")
-            self._subscriber = self._session.declare_subscriber(self._rx_key, deliver)
+            self._started = True
+            if self._receiver is not None:
+                assert self._rx_sysid is not None
+                self._receiver.register(self._rx_sysid, deliver)
+            else:
+                self._subscriber = self._session.declare_subscriber(
+                    self._rx_key, lambda sample: deliver(sample.payload.to_bytes()))
 
     def send(self, frame: bytes) -> None:
         """Publish one payload; dropped silently after close."""
@@ -103,6 +160,9 @@ class ZenohTransport:
         with self._lock:
             sub, pub = self._subscriber, self._publisher
             self._subscriber = self._publisher = None
+            if self._started and self._receiver is not None and pub is not None:
+                assert self._rx_sysid is not None
+                self._receiver.unregister(self._rx_sysid)
         for entity in (sub, pub):
             if entity is not None:
                 with contextlib.suppress(zenoh.ZError):  # session closed: nothing to undeclare
