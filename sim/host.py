@@ -265,9 +265,8 @@ class SimHost:
             return
         if peer is not None and self._udp is not None:
             self._udp.learn(index, peer)  # before the echo, which goes to learned peers
-        inbound = self._endpoints[index].take(data, self._world.t)
-        if inbound:
-            self._inbox.put(Received(index, inbound))
+        self._endpoints[index].take(
+            data, self._world.t, lambda inbound: self._inbox.put(Received(index, inbound)))
 
     def _send(self, index: int, frame: bytes) -> None:
         if self._status[index] is not VehicleStatus.LIVE:

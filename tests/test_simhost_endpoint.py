@@ -410,3 +410,17 @@ def test_echoes_from_a_receive_thread_keep_the_sequence_in_order() -> None:
     b.endpoint.apply(taken, b.world.t)  # the loop flies them: the last one is the setpoint
     assert b.autopilot.state.sp_accel_ned[0][:2].tolist() == pytest.approx([0.1, 0.0])
     assert b.autopilot.state.sp_z_ned[0] == pytest.approx(-1.0)
+
+
+def test_the_loop_gets_a_setpoint_before_its_echo_leaves() -> None:
+    """A lockstep GCS acks once it has the echo: the loop must already hold the setpoint."""
+    b = bench()
+    frame = b.gcs.encode(accel_setpoint_message(
+        b.gcs.mav, target_system=SYSID, target_component=1, time_boot_ms=0,
+        accel_xy_ned=(0.2, -0.1), z_ned=-1.5))
+    sent_at_hand_over: list[int] = []
+    taken = b.endpoint.take(frame, b.world.t,
+                            lambda inbound: sent_at_hand_over.append(len(b.sent)))
+    assert sent_at_hand_over == [0] and len(taken) == 1
+    (echo,) = of_type(b.received(), "POSITION_TARGET_LOCAL_NED")
+    assert (echo.afx, echo.afy) == pytest.approx((0.2, -0.1))

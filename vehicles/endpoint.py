@@ -152,12 +152,17 @@ class VehicleEndpoint:
         """Act on the frames in ``data`` (one datagram or zenoh payload) at sim time ``t``."""
         self.apply(self.take(data, t), t)
 
-    def take(self, data: bytes, t: float) -> list[Inbound]:
+    def take(self, data: bytes, t: float,
+             hand_over: Callable[[list[Inbound]], None] | None = None) -> list[Inbound]:
         """Decode ``data``; echo or refuse each setpoint now; the rest for :meth:`apply`.
 
-        Thread-safe; ``t`` is the sim time the echo is stamped with.
+        Thread-safe; ``t`` is the sim time the echo is stamped with. ``hand_over``
+        gets what is left for the loop *before* the echoes leave: a lockstep GCS
+        acks the clock once it has the echoes, and the loop must have the
+        setpoints by then.
         """
         out: list[Inbound] = []
+        echoes: list[MavMessage] = []
         with self._rx_lock:
             for msg in self._decoder.feed(data):
                 kind = msg.get_type()
@@ -169,8 +174,13 @@ class VehicleEndpoint:
                     setpoint = self._check(msg, t)
                     if setpoint is not None:
                         out.append(setpoint)
+                        echoes.append(self._echo(msg, t))
                 else:
                     out.append(msg)
+        if out and hand_over is not None:
+            hand_over(out)
+        if echoes:
+            self._send_now(*echoes)
         return out
 
     def apply(self, inbound: Sequence[Inbound], t: float) -> None:
@@ -202,7 +212,7 @@ class VehicleEndpoint:
         self._heartbeat_if_mode_changed(t)
 
     def _check(self, msg: MavMessage, t: float) -> AccelSetpoint | None:
-        """Echo an acceptable setpoint at once and return it; refuse (and report) the rest."""
+        """The setpoint if acceptable; refuse (and report) the rest."""
         verdict = check_setpoint(msg, self._limits)
         setpoint = verdict.setpoint
         if setpoint is None:
@@ -214,11 +224,13 @@ class VehicleEndpoint:
                 self._status_text(Severity.WARNING, verdict.text, now=True)
             return None
         self._accepted += 1
-        # The checks passed, so the autopilot takes it at the next chunk: echo now.
-        self._send_now(self._encoder.mav.position_target_local_ned_encode(
-            time_boot_ms(t), msg.coordinate_frame, msg.type_mask, msg.x, msg.y, msg.z, msg.vx,
-            msg.vy, msg.vz, msg.afx, msg.afy, msg.afz, msg.yaw, msg.yaw_rate))
         return setpoint
+
+    def _echo(self, msg: MavMessage, t: float) -> MavMessage:
+        """PX4's target report of an accepted setpoint (the autopilot flies it next chunk)."""
+        return self._encoder.mav.position_target_local_ned_encode(
+            time_boot_ms(t), msg.coordinate_frame, msg.type_mask, msg.x, msg.y, msg.z, msg.vx,
+            msg.vy, msg.vz, msg.afx, msg.afy, msg.afz, msg.yaw, msg.yaw_rate)
 
     def _timesync(self, msg: MavMessage, t: float) -> None:
         if msg.tc1 == 0:  # a probe; non-zero tc1 is someone's answer, not for us
