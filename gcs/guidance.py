@@ -180,6 +180,8 @@ class Guidance:
         self.period = period
         self.accel_norm, self.accel_axis = accel_norm, accel_axis
         self.lead = 0.5 * period if hold_compensation else 0.0
+        self._coefficients: tuple[MotionDemand, tuple[np.ndarray, np.ndarray, np.ndarray]] \
+            | None = None
 
     @classmethod
     def from_team(cls, team: Team) -> Guidance:
@@ -204,15 +206,28 @@ class Guidance:
         return self.basis.angular_rate(demand.rotate * self.max_rotation_disagreement,
                                        demand.scale)
 
-    def local(self, meas: RelativeMeasurements, demand: MotionDemand) -> np.ndarray:
-        """Unsaturated acceleration (n, 2) in each vehicle's frame."""
+    def coefficients(self, demand: MotionDemand) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Slot coefficients ``alpha_v``, ``alpha_a`` and desired distances ``d`` (n, S).
+
+        They depend on the demand only, which the operator holds for many ticks:
+        the latest are kept (half the guidance's cost for a hundred vehicles).
+        """
+        cached = self._coefficients
+        if cached is not None and cached[0] == demand:
+            return cached[1]
         f = self.formation
         alpha_v, alpha_a = self.basis.guidance_coefficients(self.velocity_matrix(demand),
                                                             self.c1, demand.scale)
         d = demand.scale * f.distances[f.slot_edge] * f.slot_mask
-        return formation_acceleration(meas.v_own, meas.rel_p, meas.rel_v, f.slot_mask, d,
-                                      alpha_v, alpha_a, c1=self.c1, c2=self.c2,
-                                      lead=self.lead)
+        self._coefficients = (demand, (alpha_v, alpha_a, d))
+        return alpha_v, alpha_a, d
+
+    def local(self, meas: RelativeMeasurements, demand: MotionDemand) -> np.ndarray:
+        """Unsaturated acceleration (n, 2) in each vehicle's frame."""
+        alpha_v, alpha_a, d = self.coefficients(demand)
+        return formation_acceleration(meas.v_own, meas.rel_p, meas.rel_v,
+                                      self.formation.slot_mask, d, alpha_v, alpha_a,
+                                      c1=self.c1, c2=self.c2, lead=self.lead)
 
     def accelerations(self, p_ned: np.ndarray, v_ned: np.ndarray, yaw: np.ndarray,
                       demand: MotionDemand) -> np.ndarray:

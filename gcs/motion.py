@@ -28,6 +28,7 @@ with the scale, and the operator's rotation stick sets the disagreement (at most
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -96,10 +97,16 @@ class MotionBasis:
     rotate: np.ndarray
     pinv: np.ndarray
 
-    @property
+    @functools.cached_property
     def rotate_mu_max(self) -> float:
         """Largest rotation disagreement per rad/s at scale 1, m/s per rad/s."""
         return float(np.abs(self.rotate).max())
+
+    @functools.cached_property
+    def zhat(self) -> np.ndarray:
+        """Unit vectors (m, 2) of the desired shape's edges, team body frame."""
+        z = self.formation.relative(self.formation.positions)
+        return z / np.linalg.norm(z, axis=1, keepdims=True)
 
     def angular_rate(self, mu_rotation: float, scale: float) -> float:
         """Angular rate (rad/s) produced when the largest rotation disagreement is ``mu``."""
@@ -111,19 +118,15 @@ class MotionBasis:
 
     def desired_velocities(self, A_v: np.ndarray) -> np.ndarray:
         """v*_i = sum_k A_v[i, k] zhat*_k in the team body frame, (n, 2)."""
-        z = self.formation.relative(self.formation.positions)
-        zhat = z / np.linalg.norm(z, axis=1, keepdims=True)
-        return A_v @ zhat
+        return A_v @ self.zhat
 
     def guidance_coefficients(self, A_v: np.ndarray, c1: float,
                               scale: float) -> tuple[np.ndarray, np.ndarray]:
         """Slot coefficients (n, S) of ``c1 A_v`` and of ``A_a`` (eq. udi's ``A`` is their
         sum), each local to its vehicle."""
         f = self.formation
-        z = f.relative(f.positions)
-        zhat = z / np.linalg.norm(z, axis=1, keepdims=True)
         # Proposition 1's A_a zhat, evaluated right to left: O(n m), not O(n m^2)
-        v_star = A_v @ zhat
+        v_star = A_v @ self.zhat
         a_star = A_v @ ((f.incidence.T @ v_star) / (scale * f.distances)[:, None])  # (n, 2)
         alpha_a = np.einsum("isk,ik->is", self.pinv, a_star)
         return c1 * edges_to_slots(f, A_v), alpha_a * f.slot_mask

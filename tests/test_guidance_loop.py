@@ -130,3 +130,22 @@ def test_rotating_one_vehicle_frame_changes_no_physical_acceleration(guidance: G
         yaw_i = yaw.copy()
         yaw_i[i] = 1.234
         np.testing.assert_allclose(guidance.accelerations(p, v, yaw_i, demand), u, atol=1e-9)
+
+
+def test_kept_coefficients_follow_every_change_of_demand(guidance: Guidance) -> None:
+    """The coefficients kept between ticks are those of the current demand, never stale."""
+    rng = np.random.default_rng(4)
+    f = guidance.formation
+    p = np.c_[f.positions + rng.normal(0, 0.05, f.positions.shape), np.full(f.n, -1.5)]
+    v = rng.normal(0, 0.2, (f.n, 3))
+    yaw = rng.normal(0, 0.3, f.n)
+    demands = [MotionDemand(0.5, 0.0, 0.0), MotionDemand(0.5, 0.0, 0.0),
+               MotionDemand(0.0, -0.7, 0.4, 1.2), MotionDemand(0.5, 0.0, 0.0), MotionDemand()]
+    for demand in demands:
+        g = guidance
+        fresh = Guidance(g.formation, c1=g.c1, c2=g.c2, max_speed=g.max_speed,
+                         max_rotation_disagreement=g.max_rotation_disagreement, period=g.period,
+                         accel_norm=g.accel_norm, accel_axis=g.accel_axis,
+                         hold_compensation=g.lead > 0)
+        assert guidance.accelerations(p[:, :2], v[:, :2], yaw, demand) == pytest.approx(
+            fresh.accelerations(p[:, :2], v[:, :2], yaw, demand), abs=1e-12)
