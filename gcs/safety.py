@@ -95,7 +95,7 @@ def evaluate(cfg: SafetyConfig, ids: Sequence[int], age: np.ndarray, p_ned: np.n
         events.append(SafetyEvent(SafetyReason.GEOFENCE, vid,
                                   f"vehicle {vid}: at ({x:.2f}, {y:.2f}, {-z:.2f}) m, "
                                   f"outside the geofence: motion frozen"))
-    if fresh.all():
+    if fresh.size and fresh.all():
         xy = p_ned[:, :2]
         r = np.linalg.norm(xy - xy.mean(axis=0), axis=1)
         for i in np.flatnonzero(r > safe_radius):

@@ -137,4 +137,7 @@ class UdpPorts:
                 return
             except OSError:  # e.g. ICMP port unreachable reported back: nothing to read
                 return
-            self._on_datagram(index, data, (str(peer[0]), int(peer[1])))
+            try:  # the one receiver serves every vehicle: a fault must not stop it
+                self._on_datagram(index, data, (str(peer[0]), int(peer[1])))
+            except Exception:
+                _log.exception("UDP datagram for vehicle %d from %s:%d failed", index, *peer)

@@ -80,10 +80,10 @@ def test_replayed_positions_are_the_recorded_ones(flight: Path) -> None:
 
 def test_scrubbing_backwards_gives_the_earlier_state(flight: Path) -> None:
     log = FlightLog.load(flight)
-    fresh = ReplayCursor(log).state(log.tick_t[0] + 5.0)
     ui = ReplayUi(log, port=_free_port())
     try:
         start = ui.timeline.start
+        fresh = ReplayCursor(log).state(start + 5.0)  # same moment, by a cursor never moved
         ui.seek(start + 30.0)
         late = ui.cursor.state(ui.timeline.t)
         ui.seek(start + 5.0)

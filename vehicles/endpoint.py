@@ -162,7 +162,7 @@ class VehicleEndpoint:
         setpoints by then.
         """
         out: list[Inbound] = []
-        echoes: list[MavMessage] = []
+        outgoing: list[MavMessage] = []  # echoes and refusals, sent once the lock is free
         with self._rx_lock:
             for msg in self._decoder.feed(data):
                 kind = msg.get_type()
@@ -171,16 +171,16 @@ class VehicleEndpoint:
                 if not self._addressed_to_me(msg):
                     self._not_for_us += 1
                 elif kind == "SET_POSITION_TARGET_LOCAL_NED":
-                    setpoint = self._check(msg, t)
+                    setpoint = self._check(msg, t, outgoing)
                     if setpoint is not None:
                         out.append(setpoint)
-                        echoes.append(self._echo(msg, t))
+                        outgoing.append(self._echo(msg, t))
                 else:
                     out.append(msg)
         if out and hand_over is not None:
             hand_over(out)
-        if echoes:
-            self._send_now(*echoes)
+        if outgoing:
+            self._send_now(*outgoing)
         return out
 
     def apply(self, inbound: Sequence[Inbound], t: float) -> None:
@@ -211,8 +211,9 @@ class VehicleEndpoint:
             self._status_text(Severity.WARNING, outcome.reason)
         self._heartbeat_if_mode_changed(t)
 
-    def _check(self, msg: MavMessage, t: float) -> AccelSetpoint | None:
-        """The setpoint if acceptable; refuse (and report) the rest."""
+    def _check(self, msg: MavMessage, t: float,
+               reports: list[MavMessage]) -> AccelSetpoint | None:
+        """The setpoint if acceptable; refuse the rest (their STATUSTEXT into ``reports``)."""
         verdict = check_setpoint(msg, self._limits)
         setpoint = verdict.setpoint
         if setpoint is None:
@@ -221,7 +222,7 @@ class VehicleEndpoint:
             last = self._refusal_reported.get(verdict.refusal)
             if last is None or t - last >= _REFUSAL_REPORT_PERIOD:
                 self._refusal_reported[verdict.refusal] = t
-                self._status_text(Severity.WARNING, verdict.text, now=True)
+                reports.extend(self._status_text_messages(Severity.WARNING, verdict.text))
             return None
         self._accepted += 1
         return setpoint
@@ -282,27 +283,23 @@ class VehicleEndpoint:
         return VehicleView(self._autopilot, self._index, self._measurements,
                            self._battery.reading(), comm, t)
 
-    def _status_text(self, severity: Severity, text: str, *, now: bool = False) -> None:
-        """STATUSTEXT, split into MAVLink 2 chunks (same id, rising chunk_seq) when long.
+    def _status_text(self, severity: Severity, text: str) -> None:
+        """Send a STATUSTEXT (loop thread)."""
+        for msg in self._status_text_messages(severity, text):
+            self._emit(msg)
 
-        ``now``: send at once, never into the loop's batch (from a receive thread).
-        """
+    def _status_text_messages(self, severity: Severity, text: str) -> list[MavMessage]:
+        """STATUSTEXT, split into MAVLink 2 chunks (same id, rising chunk_seq) when long."""
         data = text.encode("utf-8")
         mav = self._encoder.mav
         if len(data) <= _STATUSTEXT_LEN:
-            messages = [mav.statustext_encode(int(severity), data)]
-        else:
-            with self._text_lock:
-                self._statustext_id = text_id = self._statustext_id % 0xFFFF + 1
-            # A final chunk shorter than 50 bytes (possibly empty) tells receivers the text ended.
-            messages = [mav.statustext_encode(int(severity), data[start:start + _STATUSTEXT_LEN],
-                                              text_id, seq)
-                        for seq, start in enumerate(range(0, len(data) + 1, _STATUSTEXT_LEN))]
-        if now:
-            self._send_now(*messages)
-        else:
-            for msg in messages:
-                self._emit(msg)
+            return [mav.statustext_encode(int(severity), data)]
+        with self._text_lock:
+            self._statustext_id = text_id = self._statustext_id % 0xFFFF + 1
+        # A final chunk shorter than 50 bytes (possibly empty) tells receivers the text ended.
+        return [mav.statustext_encode(int(severity), data[start:start + _STATUSTEXT_LEN],
+                                      text_id, seq)
+                for seq, start in enumerate(range(0, len(data) + 1, _STATUSTEXT_LEN))]
 
     def _emit(self, msg: MavMessage) -> None:
         """Send ``msg``, or hold it for the batch :meth:`update` is building (loop thread)."""

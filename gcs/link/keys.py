@@ -125,7 +125,7 @@ def parse_mavlink(key: str) -> tuple[int, Direction] | None:
 
 
 def _parse_sysid(text: str) -> int | None:
-    if not text.isdigit() or (len(text) > 1 and text[0] == "0"):
+    if not (text.isascii() and text.isdigit()) or (len(text) > 1 and text[0] == "0"):
         return None
     value = int(text)
     return value if 1 <= value <= 255 else None

@@ -256,11 +256,11 @@ class Link:
             raise LinkError(self._sysid, "link is closed")
         # The loop, the service thread and commands all send: encoding gives the
         # sequence number, so encode and send as one step or the vehicle sees a loss.
-        with self._send_lock:
+        with self._send_lock:  # listeners too: the recorder keeps frames in sequence order
             frame = encode()
             self._transport.send(frame)
-        for listener in self._frame_listeners:
-            self._call(listener, FrameDirection.OUT, frame)
+            for listener in self._frame_listeners:
+                self._call(listener, FrameDirection.OUT, frame)
 
     def send_setpoint(self, *, accel_xy_ned: tuple[float, float], z_ned: float | None = None,
                       az_ned: float | None = None) -> None:
@@ -435,10 +435,11 @@ class Link:
                 self.send_message(self._encoder.mav.heartbeat_encode(
                     mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0,
                     mavlink.MAV_STATE_ACTIVE))
-                self._next_heartbeat = now + self._heartbeat_period_s
+                # on the schedule, not from a late call (a shared thread serves in steps)
+                self._next_heartbeat = max(self._next_heartbeat + self._heartbeat_period_s, now)
             if self._timesync_period_s > 0 and now >= self._next_timesync:
                 self.send_timesync()
-                self._next_timesync = now + self._timesync_period_s
+                self._next_timesync = max(self._next_timesync + self._timesync_period_s, now)
         except LinkError:
             return math.inf  # closed meanwhile
         return min((t for t, period in ((self._next_heartbeat, self._heartbeat_period_s),

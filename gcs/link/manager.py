@@ -9,6 +9,7 @@ liveliness tokens and from the links' heartbeats.
 from __future__ import annotations
 
 import contextlib
+import logging
 import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -31,6 +32,8 @@ from gcs.link.zenoh_session import open_session
 from gcs.link.zenoh_transport import FleetReceiver, ZenohTransport, watch_alive
 
 __all__ = ["LinkManager"]
+
+_log = logging.getLogger(__name__)
 
 
 class LinkManager:
@@ -168,5 +171,8 @@ class LinkManager:
         while not self._stop.wait(self._check_period_s):
             now = time.monotonic()
             for sysid, link in list(self._links.items()):
-                link.service(now)
-                self.discovery.report(sysid, link.health.alive, PresenceSource.HEARTBEAT)
+                try:  # one link's fault must not stop every link's heartbeat
+                    link.service(now)
+                    self.discovery.report(sysid, link.health.alive, PresenceSource.HEARTBEAT)
+                except Exception:
+                    _log.exception("link %d: heartbeat or presence check failed", sysid)

@@ -138,13 +138,13 @@ class ZenohTransport:
         with self._lock:
             if self._started or self._publisher is None:
                 raise RuntimeError(f"{self._description}: already started or closed")
-            self._started = True
             if self._receiver is not None:
                 assert self._rx_sysid is not None
                 self._receiver.register(self._rx_sysid, deliver)
             else:
                 self._subscriber = self._session.declare_subscriber(
                     self._rx_key, lambda sample: deliver(sample.payload.to_bytes()))
+            self._started = True
 
     def send(self, frame: bytes) -> None:
         """Publish one payload; dropped silently after close."""
