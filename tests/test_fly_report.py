@@ -8,34 +8,18 @@ a .tlog, and `gcs report` reads it back.
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 from gcs.flightlog import FlightLog
 from gcs.logreader import TlogIndex
-
-SQUARE = "configs/bebop_square.yaml"
-SHORT = "configs/scenarios/short_flight.yaml"
+from tests.conftest import SQUARE, run_gcs
 
 
-def gcs(*args: str, timeout: float = 300) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "gcs", *args], capture_output=True, text=True,
-                          timeout=timeout, check=False)
-
-
-@pytest.fixture(scope="module")
-def flight(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict, Path]:
-    log = tmp_path_factory.mktemp("flight") / "short.tlog"
-    out = gcs("fly", "--config", SQUARE, "--scenario", SHORT, "--json", "--record", str(log))
-    assert out.returncode == 0, out.stdout + out.stderr
-    return json.loads(out.stdout.splitlines()[-1]), log
-
-
-def test_short_flight_lifts_the_payload_and_keeps_the_shape(flight) -> None:  # type: ignore[no-untyped-def]
-    m, _ = flight
+def test_short_flight_lifts_the_payload_and_keeps_the_shape(
+        short_flight: tuple[dict, Path]) -> None:
+    m, _ = short_flight
     assert m["completed"] and m["error"] is None
     assert m["phases"][-1] == "landed"
     assert {"lifting", "formation", "setting down"} <= set(m["phases"])
@@ -48,14 +32,14 @@ def test_short_flight_lifts_the_payload_and_keeps_the_shape(flight) -> None:  # 
 
 
 def test_missing_scenario_is_one_line() -> None:
-    out = gcs("fly", "--config", SQUARE, "--scenario", "configs/scenarios/missing.yaml")
+    out = run_gcs("fly", "--config", SQUARE, "--scenario", "configs/scenarios/missing.yaml")
     assert out.returncode == 2
     assert "missing.yaml: cannot read file" in out.stderr
 
 
-def test_report_matches_the_flight(flight, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
-    m, log = flight
-    out = gcs("report", str(log), "--out", str(tmp_path), "--json", "--quiet")
+def test_report_matches_the_flight(short_flight: tuple[dict, Path], tmp_path: Path) -> None:
+    m, log = short_flight
+    out = run_gcs("report", str(log), "--out", str(tmp_path), "--json", "--quiet")
     assert out.returncode == 0, out.stderr
     summary = json.loads(out.stdout)
     for name in ("formation.png", "trajectories.png", "distance_errors.png",
@@ -73,14 +57,14 @@ def test_report_matches_the_flight(flight, tmp_path: Path) -> None:  # type: ign
     assert summary["vehicles"] == [1, 2, 3, 4]
 
 
-def test_truncated_log_still_reports(flight, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
-    _, log = flight
+def test_truncated_log_still_reports(short_flight: tuple[dict, Path], tmp_path: Path) -> None:
+    _, log = short_flight
     cut = tmp_path / "cut.tlog"
     data = log.read_bytes()
     index = TlogIndex.build(log)
     middle = len(index) // 2  # cut inside a frame: a cut on a record boundary is a whole log
     cut.write_bytes(data[: int(index.offset[middle]) + int(index.length[middle]) // 2])
-    out = gcs("report", str(cut), "--out", str(tmp_path / "r"), "--quiet")
+    out = run_gcs("report", str(cut), "--out", str(tmp_path / "r"), "--quiet")
     assert out.returncode == 0, out.stderr
     assert "truncated=True" in out.stdout
     parsed = FlightLog.load(cut)
@@ -90,9 +74,9 @@ def test_truncated_log_still_reports(flight, tmp_path: Path) -> None:  # type: i
 def test_empty_and_garbage_logs_are_refused_in_one_line(tmp_path: Path) -> None:
     empty = tmp_path / "empty.tlog"
     empty.write_bytes(b"")
-    out = gcs("report", str(empty), "--quiet")
+    out = run_gcs("report", str(empty), "--quiet")
     assert out.returncode == 2 and "empty file" in out.stderr
     junk = tmp_path / "junk.tlog"
     junk.write_bytes(bytes(range(256)) * 40)
-    out = gcs("report", str(junk), "--quiet")
+    out = run_gcs("report", str(junk), "--quiet")
     assert out.returncode == 2 and "no MAVLink messages" in out.stderr

@@ -22,25 +22,15 @@ from pymavlink import mavutil
 from gcs.flightlog import FlightLog
 from gcs.link.encoder import MavlinkEncoder
 from gcs.recorder import TlogRecorder
+from tests.conftest import run_gcs
 from web.replay import ReplayCursor
 from web.replay_page import ReplayUi, replay_summary_html
 from web.timeline import Timeline
 
-SQUARE = "configs/bebop_square.yaml"
-SHORT = "configs/scenarios/short_flight.yaml"
 
-
-def gcs(*args: str, timeout: float = 120) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "gcs", *args], capture_output=True, text=True,
-                          timeout=timeout, check=False)
-
-
-@pytest.fixture(scope="module")
-def flight(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    path = tmp_path_factory.mktemp("replay") / "flight.tlog"
-    out = gcs("fly", "--config", SQUARE, "--scenario", SHORT, "--record", str(path))
-    assert out.returncode == 0, out.stderr
-    return path
+@pytest.fixture
+def flight(short_flight: tuple[dict, Path]) -> Path:
+    return short_flight[1]
 
 
 def _raw(path: Path) -> list:
@@ -145,7 +135,7 @@ def test_replay_command_serves_the_page_without_controls(flight: Path,
                                                          tmp_path: Path) -> None:
     bad = tmp_path / "bad.tlog"
     bad.write_bytes(b"not a log at all" * 10)
-    out = gcs("replay", str(bad))
+    out = run_gcs("replay", str(bad))
     assert out.returncode == 2
     assert len(out.stderr.strip().splitlines()) == 1 and "error" in out.stderr
 
