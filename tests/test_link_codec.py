@@ -177,9 +177,9 @@ def test_mavlink1_frames_are_read_on_unsigned_links() -> None:
 def test_setpoint_messages_round_trip_for_both_kinds() -> None:
     gcs = gcs_encoder()
     decoder = FrameDecoder(datagram=True)
-    xy_z = accel_setpoint_message(gcs.mav, target_system=2, target_component=1,
+    xy_z = accel_setpoint_message(target_system=2, target_component=1,
                                   time_boot_ms=1234, accel_xy_ned=(0.5, -0.25), z_ned=-1.2)
-    acc = accel_setpoint_message(gcs.mav, target_system=2, target_component=1,
+    acc = accel_setpoint_message(target_system=2, target_component=1,
                                  time_boot_ms=1250, accel_xy_ned=(0.5, -0.25), az_ned=-0.4)
     a, b = decoder.feed(gcs.encode(xy_z) + gcs.encode(acc))
     first, second = read_setpoint(a), read_setpoint(b)
@@ -204,7 +204,7 @@ def test_fast_framing_gives_the_bytes_pymavlink_gives(signed: bool) -> None:
               "accel_xy_ned": tuple(rng.normal(0, 1, 2)) if k % 3 else (0.0, 0.0)}
         kw |= {"z_ned": -1.5} if k % 2 else {"az_ned": float(rng.normal()) if k % 5 else 0.0}
         assert fast.encode_fields(SETPOINT_MESSAGE, *accel_setpoint_fields(**kw)) == \
-            slow.encode(accel_setpoint_message(slow.mav, **kw))
+            slow.encode(accel_setpoint_message(**kw))
     # trailing zeros of the payload are dropped, as MAVLink 2 requires
     position = v20.MAVLink_local_position_ned_message
     values = (5, 1.0, 2.0, -3.0, 0.0, 0.0, 0.0)
@@ -216,14 +216,13 @@ def test_fast_framing_gives_the_bytes_pymavlink_gives(signed: bool) -> None:
 
 
 def test_setpoint_needs_exactly_one_finite_vertical_channel() -> None:
-    mav = gcs_encoder().mav
     common = {"target_system": 2, "target_component": 1, "time_boot_ms": 0}
     with pytest.raises(ValueError, match="exactly one"):
-        accel_setpoint_message(mav, accel_xy_ned=(0, 0), **common)
+        accel_setpoint_message(accel_xy_ned=(0, 0), **common)
     with pytest.raises(ValueError, match="exactly one"):
-        accel_setpoint_message(mav, accel_xy_ned=(0, 0), z_ned=-1, az_ned=0, **common)
+        accel_setpoint_message(accel_xy_ned=(0, 0), z_ned=-1, az_ned=0, **common)
     with pytest.raises(ValueError, match="finite"):
-        accel_setpoint_message(mav, accel_xy_ned=(math.nan, 0), z_ned=-1, **common)
+        accel_setpoint_message(accel_xy_ned=(math.nan, 0), z_ned=-1, **common)
 
 
 def test_other_position_targets_are_not_acceleration_setpoints() -> None:
@@ -240,7 +239,7 @@ def test_encode_and_decode_are_fast_enough_for_a_fleet() -> None:
     gcs = gcs_encoder()
     decoder = FrameDecoder(datagram=True)
     n = 2000
-    msg = accel_setpoint_message(gcs.mav, target_system=2, target_component=1, time_boot_ms=0,
+    msg = accel_setpoint_message(target_system=2, target_component=1, time_boot_ms=0,
                                  accel_xy_ned=(0.1, 0.2), z_ned=-1.0)
     t0 = time.perf_counter()
     frames = [gcs.encode(msg) for _ in range(n)]

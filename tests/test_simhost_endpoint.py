@@ -85,7 +85,7 @@ class Bench:
 
     def setpoint(self, accel_xy: tuple[float, float], z: float | None = None, *,
                  az: float | None = None, target: int = SYSID) -> None:
-        self.send(accel_setpoint_message(self.gcs.mav, target_system=target, target_component=1,
+        self.send(accel_setpoint_message(target_system=target, target_component=1,
                                          time_boot_ms=0, accel_xy_ned=accel_xy, z_ned=z,
                                          az_ned=az))
 
@@ -386,8 +386,8 @@ def test_echoes_from_a_receive_thread_keep_the_sequence_in_order() -> None:
     """take() echoes on its own thread while the loop sends telemetry: no reordering."""
     b = bench()
     frame = b.gcs.encode(accel_setpoint_message(
-        b.gcs.mav, target_system=SYSID, target_component=1, time_boot_ms=0,
-        accel_xy_ned=(0.1, 0.0), z_ned=-1.0))
+        target_system=SYSID, target_component=1, time_boot_ms=0, accel_xy_ned=(0.1, 0.0),
+        z_ned=-1.0))
     stop = threading.Event()
     taken: list[object] = []
 
@@ -416,8 +416,8 @@ def test_the_loop_gets_a_setpoint_before_its_echo_leaves() -> None:
     """A lockstep GCS acks once it has the echo: the loop must already hold the setpoint."""
     b = bench()
     frame = b.gcs.encode(accel_setpoint_message(
-        b.gcs.mav, target_system=SYSID, target_component=1, time_boot_ms=0,
-        accel_xy_ned=(0.2, -0.1), z_ned=-1.5))
+        target_system=SYSID, target_component=1, time_boot_ms=0, accel_xy_ned=(0.2, -0.1),
+        z_ned=-1.5))
     sent_at_hand_over: list[int] = []
     taken = b.endpoint.take(frame, b.world.t,
                             lambda inbound: sent_at_hand_over.append(len(b.sent)))

@@ -113,11 +113,10 @@ def accel_setpoint_fields(*, target_system: int, target_component: int, time_boo
             target_system, target_component, mavlink.MAV_FRAME_LOCAL_NED)
 
 
-def accel_setpoint_message(mav: mavlink.MAVLink, *, target_system: int, target_component: int,
-                           time_boot_ms: int, accel_xy_ned: tuple[float, float],
-                           z_ned: float | None = None, az_ned: float | None = None) -> MavMessage:
-    """The message of :func:`accel_setpoint_fields` as a pymavlink object (for ``mav``)."""
-    del mav  # the message needs no sender; kept so callers read like the *_encode factories
+def accel_setpoint_message(*, target_system: int, target_component: int, time_boot_ms: int,
+                           accel_xy_ned: tuple[float, float], z_ned: float | None = None,
+                           az_ned: float | None = None) -> MavMessage:
+    """The message of :func:`accel_setpoint_fields` as a pymavlink object."""
     values = accel_setpoint_fields(target_system=target_system,
                                    target_component=target_component,
                                    time_boot_ms=time_boot_ms, accel_xy_ned=accel_xy_ned,
