@@ -201,7 +201,7 @@ class SimHost:
         for k, endpoint in enumerate(self._endpoints):
             if self._status[k] is not VehicleStatus.KILLED:
                 endpoint.update(t)
-                self._drain()  # keep echoes and acks prompt while telemetry goes out
+                self._drain()  # keep command acks prompt while telemetry goes out
         self._fabric.publish_clock(t)
         if t >= self._next_truth - _EPS:
             self._next_truth += TRUTH_PERIOD_S  # keeps the 20 Hz phase between chunk times

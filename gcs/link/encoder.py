@@ -8,7 +8,6 @@ use) and the simulated vehicles' endpoint (their own system id, component 1).
 
 from __future__ import annotations
 
-import hashlib
 import struct
 import threading
 import time
@@ -16,7 +15,7 @@ from collections.abc import Callable
 
 from gcs.link.crc import frame_crc
 from gcs.link.dialect import MavMessage, mavlink
-from gcs.link.signing import SigningKey, signing_timestamp
+from gcs.link.signing import SigningKey, signature, signing_timestamp
 
 __all__ = ["DEFAULT_GCS_COMPONENT_ID", "DEFAULT_GCS_SYSTEM_ID", "MavlinkEncoder"]
 
@@ -106,7 +105,7 @@ class MavlinkEncoder:
                 signing.timestamp = max(signing.timestamp,
                                         signing_timestamp(self._wall_clock()))
                 frame += _SIGNATURE_STAMP.pack(signing.link_id, signing.timestamp)[:7]
-                frame += hashlib.sha256(signing.secret_key + frame).digest()[:6]
+                frame += signature(signing.secret_key, frame)
                 signing.timestamp += 1
             mav.seq = (mav.seq + 1) & 0xFF
             self.frames_sent += 1

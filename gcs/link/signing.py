@@ -36,6 +36,7 @@ __all__ = [
     "SigningKey",
     "load_signing_key",
     "parse_signing_key",
+    "signature",
     "signing_timestamp",
     "write_signing_key",
 ]
@@ -45,6 +46,12 @@ SIGNATURE_LEN = 13
 
 _EPOCH_2015 = 1420070400.0
 _ONE_MINUTE = 60 * 100_000  # in signing timestamp units (10 us)
+
+
+def signature(secret: bytes, signed_part: bytes | bytearray) -> bytes:
+    """The 6-byte signature of a frame: ``signed_part`` runs from the start marker to the
+    signature's timestamp (MAVLink 2 signing: first 48 bits of SHA-256(secret + part))."""
+    return hashlib.sha256(secret + bytes(signed_part)).digest()[:6]
 
 
 def signing_timestamp(unix_time: float | None = None) -> int:
@@ -147,7 +154,7 @@ class SignatureVerifier:
             return SignatureCheck.UNSIGNED
         link_id = frame[-SIGNATURE_LEN]
         stamp = int.from_bytes(frame[-12:-6], "little")
-        digest = hashlib.sha256(self._secret + bytes(frame[:-6])).digest()[:6]
+        digest = signature(self._secret, frame[:-6])
         if not hmac.compare_digest(digest, bytes(frame[-6:])):
             return SignatureCheck.BAD_SIGNATURE
         stream = (link_id, sysid, compid)
