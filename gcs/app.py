@@ -136,7 +136,7 @@ class GcsApp:
             if lockstep:
                 self._ack = self.session.declare_publisher(
                     keys.clock_ack(self.fleet), congestion_control=zenoh.CongestionControl.BLOCK,
-                    express=True)
+                    priority=zenoh.Priority.REAL_TIME, express=True)
         else:
             self.clock = WallClock()
         self._subs.append(self.session.declare_subscriber(keys.sim(self.fleet, "truth"),
@@ -157,7 +157,8 @@ class GcsApp:
                                          epoch=time.time() - self.clock.now())
         self.runtime = Runtime(team, self.links.profiles, self.clock, self.operator,
                                recorder=self.recorder, analysis=analysis,
-                               truth_source=lambda: self.truth)
+                               truth_source=lambda: self.truth,
+                               setpoints_per_tick=1 if lockstep else None)
         if self._ack is not None:
             self._echo = _EchoCounter(self.links.links.values())
             self.runtime.add_listener(lambda snap: self._send_ack(snap.fleet.t))

@@ -221,8 +221,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("demo", help="simulated team, GCS and live page in one command",
                        description="Starts the simulated team (1x, embedded zenoh, no router), "
-                                   "a GCS on the simulator's clock and the live page; prints "
-                                   "the page's address. Ctrl-C stops everything.")
+                                   "a GCS on the wall clock, as with real vehicles, and the "
+                                   "live page; prints the page's address. Ctrl-C stops "
+                                   "everything.")
     p.add_argument("--config", default=None,
                    help="team config (default configs/bebop_square.yaml)")
     _add_page_options(p)

@@ -68,6 +68,11 @@ class GuidanceConfig:
     c1: float = field(doc="velocity gain c1, 1/s", gt=0.0)
     c2: float = field(doc="distance gain c2, 1/s^2", gt=0.0)
     rate_hz: float = field(doc="guidance rate, Hz", default=4.0, gt=0.0, le=100.0)
+    setpoint_rate_hz: float = field(
+        doc="setpoints per second to each vehicle: the latest guidance output is re-sent "
+            "between ticks, so one late tick does not trip the autopilot's setpoint timeout "
+            "(0.5 s in the sim, COM_OF_LOSS_T on PX4); a whole multiple of rate_hz",
+        default=12.0, gt=0.0, le=100.0)
     max_speed: float = field(doc="translation speed at full stick, m/s", default=1.0, gt=0.0)
     max_rotation_disagreement: float = field(
         doc="largest rotation disagreement mu_r at full stick, m/s", default=0.2, ge=0.0)
@@ -77,7 +82,16 @@ class GuidanceConfig:
     hold_compensation: bool = field(
         doc="predict relative positions half a period ahead (see gcs.guidance)", default=True)
 
+    @property
+    def setpoints_per_tick(self) -> int:
+        """Setpoints each vehicle gets per guidance tick (the tick's own included)."""
+        return round(self.setpoint_rate_hz / self.rate_hz)
+
     def __post_init__(self) -> None:
+        ratio = self.setpoint_rate_hz / self.rate_hz
+        if ratio < 1.0 - 1e-9 or abs(ratio - round(ratio)) > 1e-6:
+            raise ValueError(f"guidance.setpoint_rate_hz ({self.setpoint_rate_hz:g} Hz) must be a "
+                             f"whole multiple of guidance.rate_hz ({self.rate_hz:g} Hz)")
         if self.scale_min > 1.0 or self.scale_max < 1.0:
             raise ValueError(f"guidance.scale_min/scale_max must bracket 1, got "
                              f"[{self.scale_min:g}, {self.scale_max:g}]")

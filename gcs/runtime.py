@@ -11,6 +11,13 @@ Each tick (scheduled on a :class:`~gcs.clock.Clock`, wall or simulator time):
    goes on;
 4. advance the flight phase and record the guidance internals.
 
+Between ticks the latest setpoints are re-sent (``guidance.setpoint_rate_hz``,
+12 Hz by default): the guidance stays at the paper's 4 Hz, but one tick that
+comes late on a busy machine no longer leaves a vehicle half a second without
+a setpoint, which sends it into hold. In lockstep with the simulator (``gcs
+fly``) the sim cannot outrun the loop, and re-sends would arrive at sim times
+that vary from run to run, so there each tick sends once.
+
 Phase actions that wait for acknowledgements (arm, take off, land) run on a
 worker thread, so the loop never waits on a vehicle. The latest
 :class:`RuntimeSnapshot` is what the UI and the flight metrics read.
@@ -91,12 +98,15 @@ class Runtime:
         recorder: optional flight recorder.
         analysis: the team's worst-case analysis (computed if not given).
         truth_source: in simulation, gives the latest ground truth to record.
+        setpoints_per_tick: setpoints per vehicle and tick (default: from the
+            config's ``guidance.setpoint_rate_hz``; 1 sends only the tick's own).
     """
 
     def __init__(self, team: Team, profiles: Mapping[int, AutopilotProfile], clock: Clock,
                  operator: OperatorCommand, *, recorder: TlogRecorder | None = None,
                  analysis: Analysis | None = None,
-                 truth_source: Callable[[], SimTruth | None] | None = None) -> None:
+                 truth_source: Callable[[], SimTruth | None] | None = None,
+                 setpoints_per_tick: int | None = None) -> None:
         self.team = team
         self.ids = team.formation.ids
         missing = [vid for vid in self.ids if vid not in profiles]
@@ -111,6 +121,13 @@ class Runtime:
         self.analysis: Analysis = analysis if analysis is not None else analyze(team)
         self._accel_last = 0.0
         self.period = 1.0 / team.config.guidance.rate_hz
+        self.setpoints_per_tick = (team.config.guidance.setpoints_per_tick
+                                   if setpoints_per_tick is None else setpoints_per_tick)
+        if self.setpoints_per_tick < 1:
+            raise ValueError(f"setpoints_per_tick must be at least 1, got {setpoints_per_tick}")
+        self._streamed: np.ndarray | None = None  # (n, 2) the last tick's setpoints, if streaming
+        self.resends = 0
+        """Setpoint rounds re-sent between ticks so far."""
         self._phase = Phase.CONNECT
         self._lock = threading.Lock()
         self._events: collections.deque[Event] = collections.deque(maxlen=200)
@@ -312,8 +329,10 @@ class Runtime:
         moving = phase is Phase.FORMATION and not verdict.freeze and op.guidance_on
         demand = op.demand if moving else MotionDemand(scale=op.demand.scale)
         accel = np.zeros((fleet.n, 2))
+        self._streamed = None
         if phase.streaming:
             accel = self._stream(fleet, demand, op)
+            self._streamed = accel
             self._advance(phase, op, now)
         self._accel_last = float(np.linalg.norm(accel, axis=1).max()) if len(accel) else 0.0
         errors = self.team.formation.distance_errors(fleet.p_ned[:, :2], demand.scale)
@@ -363,14 +382,27 @@ class Runtime:
         else:  # cannot place every vehicle: hold still horizontally
             accel = np.zeros((fleet.n, 2))
         accel = np.nan_to_num(accel, nan=0.0, posinf=0.0, neginf=0.0)
-        z = -op.altitude
+        self._send_all(accel, z_ned=-op.altitude)
+        return accel
+
+    def _send_all(self, accel: np.ndarray, *, z_ned: float) -> None:
+        """One setpoint per vehicle; an error is reported once per vehicle, never raised."""
         for i, vid in enumerate(self.ids):
             try:
                 self.profiles[vid].send_setpoint(accel_xy_ned=(float(accel[i, 0]),
-                                                               float(accel[i, 1])), z_ned=z)
+                                                               float(accel[i, 1])), z_ned=z_ned)
             except Exception as exc:
                 self._warn_once(("send", vid), f"vehicle {vid}: setpoint not sent: {exc}")
-        return accel
+
+    def resend(self) -> bool:
+        """Re-send the last tick's setpoints (the altitude target's ramp moves on); False if
+        the last tick streamed none or the phase stopped streaming since."""
+        accel = self._streamed
+        if accel is None or not self.phase.streaming:
+            return False
+        self._send_all(accel, z_ned=-self.operator.snapshot(self.clock.now()).altitude)
+        self.resends += 1
+        return True
 
     def _advance(self, phase: Phase, op: OperatorSnapshot, now: float) -> None:
         reached = abs(op.altitude - op.altitude_target) < 1e-6
@@ -422,23 +454,36 @@ class Runtime:
                          jitter_p99=float(np.percentile(jit, 99)), overruns=self._overruns)
 
     def run(self, stop: threading.Event) -> None:
-        """Tick at the guidance rate on the clock until ``stop`` is set (or the clock dies)."""
+        """Tick at the guidance rate on the clock until ``stop`` is set (or the clock dies).
+
+        The period is cut into ``setpoints_per_tick`` slots: a tick in the first,
+        re-sends in the others. After a stall longer than a period the loop ticks
+        at once and restarts its schedule from there (it skips, never bursts).
+        """
+        n = self.setpoints_per_tick
+        slot = self.period / n
         k = 0
         start = self.clock.now()
         while not stop.is_set():
-            due = start + k * self.period
+            due = start + k * slot
             try:
                 self.clock.sleep_until(due)
             except ClockStoppedError as exc:
                 self._event("error", f"loop stopped: {exc}")
                 return
-            late = self.clock.now() - due
-            self._jitter.append(late)
+            now = self.clock.now()
+            late = now - due
             if late > self.period:
                 self._overruns += 1
-                k = int((self.clock.now() - start) / self.period)  # skip, do not burst
+                self._event("warning", f"loop ran {late:.2f} s late: no setpoints for "
+                                       f"{late + slot:.2f} s")
+                start, k = now, 0  # tick now, then keep the schedule from here
             try:
-                self.tick()
+                if k % n == 0:
+                    self._jitter.append(late)
+                    self.tick()
+                else:
+                    self.resend()
             except Exception as exc:  # a bug must not stop the team's setpoint stream silently
                 self._event("error", f"tick failed: {type(exc).__name__}: {exc}")
             k += 1

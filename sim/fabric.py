@@ -84,11 +84,15 @@ class HostFabric:
         self._links: dict[int, _VehicleLink] = {}
         self._subscribers: list[zenoh.Subscriber] = []
         try:
+            # The clock paces the GCS loop: at real-time priority it has a queue of its
+            # own, so a backlog of telemetry (which blocks) cannot crowd it out; on a
+            # full queue it drops, as the next sample supersedes it anyway.
             self._clock = self._session.declare_publisher(
-                keys.clock(fleet), congestion_control=zenoh.CongestionControl.DROP, express=True)
+                keys.clock(fleet), congestion_control=zenoh.CongestionControl.DROP,
+                priority=zenoh.Priority.REAL_TIME, express=True)
             self._truth = self._session.declare_publisher(
                 keys.sim(fleet, TRUTH_TOPIC), congestion_control=zenoh.CongestionControl.DROP,
-                express=True)
+                priority=zenoh.Priority.DATA_LOW, express=True)
             self._subscribers.append(self._session.declare_subscriber(
                 keys.clock_ack(fleet), lambda s: self._on_ack(s, inbox)))
             self._subscribers.append(self._session.declare_subscriber(

@@ -120,6 +120,13 @@ def test_scale_range_must_bracket_one(tmp_path: Path) -> None:
             "must bracket 1")
 
 
+def test_setpoint_rate_must_be_a_multiple_of_the_guidance_rate(tmp_path: Path) -> None:
+    refused(tmp_path, lambda d: d["guidance"].update(setpoint_rate_hz=10.0), "guidance",
+            "setpoint_rate_hz (10 Hz) must be a whole multiple of guidance.rate_hz (4 Hz)")
+    refused(tmp_path, lambda d: d["guidance"].update(setpoint_rate_hz=2.0), "guidance",
+            "whole multiple")
+
+
 def test_malformed_yaml(tmp_path: Path) -> None:
     path = tmp_path / "broken.yaml"
     path.write_text("name: x\nvehicles: [1, 2\n")

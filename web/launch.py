@@ -98,7 +98,13 @@ def serve(app: GcsApp, *, host: str, port: int, gamepad: Path | None, no_gamepad
 
 def run_demo(config: str, *, host: str, port: int, gamepad: Path | None,
              no_gamepad: bool) -> int:
-    """Simulated team + GCS on the sim clock + page; blocks until stopped."""
+    """Simulated team at real speed + GCS + page; blocks until stopped.
+
+    The GCS runs on the wall clock, as ``gcs run`` does with real vehicles: its
+    setpoints then keep their schedule even when the sim's clock samples queue
+    up behind a busy machine's telemetry (on the sim clock they did not, and the
+    vehicles went into hold).
+    """
     _stop_on_sigterm()
     team = load_team(config)
     endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
@@ -106,7 +112,7 @@ def run_demo(config: str, *, host: str, port: int, gamepad: Path | None,
     with SimProcess(team.source, endpoint=endpoint, speed="1") as sim:
         _say(sim.ready_line)
         settings = ZenohSettings(mode="peer", connect=(endpoint,))
-        with GcsApp(team, zenoh_settings=settings, sim_clock=True) as app:
+        with GcsApp(team, zenoh_settings=settings) as app:
             code = serve(app, host=host, port=port, gamepad=gamepad, no_gamepad=no_gamepad,
                          alive=sim.alive)
         if code:

@@ -75,9 +75,12 @@ class ZenohTransport:
     def __init__(self, session: zenoh.Session, *, tx_key: str, rx_key: str,
                  description: str | None = None,
                  congestion: zenoh.CongestionControl = zenoh.CongestionControl.DROP,
+                 priority: zenoh.Priority = zenoh.Priority.DATA,
                  receiver: FleetReceiver | None = None) -> None:
         """``receiver``: receive through a shared :class:`FleetReceiver` (for the system
-        id in ``rx_key``) instead of a subscriber of this transport's own."""
+        id in ``rx_key``) instead of a subscriber of this transport's own. ``priority``:
+        zenoh queues each priority apart, so a higher one is not stuck behind a backlog
+        of lower ones."""
         self._session = session
         self._receiver = receiver
         parsed = keys.parse_mavlink(rx_key)
@@ -88,7 +91,7 @@ class ZenohTransport:
         self._rx_key = rx_key
         self._description = description or f"zenoh {tx_key} / {rx_key}"
         self._publisher: zenoh.Publisher | None = session.declare_publisher(
-            tx_key, congestion_control=congestion, express=False)
+            tx_key, congestion_control=congestion, priority=priority, express=False)
         self._subscriber: zenoh.Subscriber | None = None
         self._started = False
         self._lock = threading.Lock()
@@ -101,13 +104,14 @@ class ZenohTransport:
         """The GCS end of vehicle ``sysid``'s link.
 
         Commands and setpoints are few and must not vanish in a congested queue
-        (two lost setpoints put a vehicle in hold), so they block rather than drop;
-        the vehicles' telemetry drops (the latest sample wins).
+        (two lost setpoints put a vehicle in hold), so they block rather than drop,
+        and go at interactive priority, ahead of any bulk data on the same link.
         """
         return cls(session, tx_key=keys.mavlink(fleet, sysid, keys.Direction.TO_VEHICLE),
                    rx_key=keys.mavlink(fleet, sysid, keys.Direction.FROM_VEHICLE),
                    description=f"zenoh fleet/{fleet}/vehicle/{sysid}",
-                   congestion=zenoh.CongestionControl.BLOCK, receiver=receiver)
+                   congestion=zenoh.CongestionControl.BLOCK,
+                   priority=zenoh.Priority.INTERACTIVE_HIGH, receiver=receiver)
 
     @classmethod
     def for_vehicle(cls, session: zenoh.Session, *, fleet: str, sysid: int) -> ZenohTransport:

@@ -1,0 +1,76 @@
+"""The setpoint stream between guidance ticks, against the real simulator in real time.
+
+Guidance runs at 4 Hz, but each vehicle gets ``guidance.setpoint_rate_hz``
+(12 Hz) setpoints: the tick's own and re-sends of it. The vehicles' offboard
+timeout is 0.5 s, so with one setpoint per tick a single tick 0.25 s late on
+a busy machine was enough to send the whole team into hold (seen in CI).
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections import Counter
+
+from gcs.app import GcsApp
+from gcs.config import load_team
+from gcs.link.transport import FrameDirection
+from gcs.link.zenoh_session import ZenohSettings
+from gcs.phases import Phase
+from gcs.scenario import Scenario, Step, play
+from gcs.simprocess import SimProcess, free_tcp_port
+
+TEAM = load_team("configs/bebop_square.yaml")
+SETPOINT_MSGID = 84  # SET_POSITION_TARGET_LOCAL_NED
+
+
+def test_each_tick_is_followed_by_resends_and_the_vehicles_stay_offboard() -> None:
+    per_tick = TEAM.config.guidance.setpoints_per_tick
+    assert per_tick == 3
+    endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
+    with SimProcess(TEAM.source, endpoint=endpoint, speed="1"), \
+            GcsApp(TEAM, zenoh_settings=ZenohSettings(connect=(endpoint,))) as app:
+        rt = app.runtime
+        app.start()
+        play(Scenario(name="up", steps=(Step(action="arm"), Step(action="takeoff"))), rt,
+             app.clock)
+        assert rt.phase is Phase.HOVER
+
+        sent: Counter[int] = Counter()
+        counting = threading.Event()
+
+        def count(vid: int, direction: FrameDirection, frame: bytes) -> None:
+            if counting.is_set() and direction is FrameDirection.OUT \
+                    and int.from_bytes(frame[7:10], "little") == SETPOINT_MSGID:
+                sent[vid] += 1
+
+        for vid, link in app.links.links.items():
+            link.add_frame_listener(lambda d, f, vid=vid: count(vid, d, f))
+        ticks0, resends0 = rt.stats().ticks, rt.resends
+        counting.set()
+        time.sleep(2.0)
+        counting.clear()
+        ticks, resends = rt.stats().ticks - ticks0, rt.resends - resends0
+
+        assert ticks >= 4, f"{ticks} ticks in 2 s"
+        # every tick is followed by per_tick - 1 re-sends (give or take the window's edges)
+        assert abs(resends - (per_tick - 1) * ticks) <= per_tick, (ticks, resends)
+        for vid in TEAM.formation.ids:
+            assert abs(sent[vid] - (ticks + resends)) <= 1, (vid, sent, ticks, resends)
+        assert app.snapshot is not None
+        assert set(app.snapshot.fleet.modes) == {"OFFBOARD"}, app.snapshot.fleet.modes
+
+
+def test_lockstep_runs_send_one_setpoint_per_tick() -> None:
+    """Re-sends would reach a lockstep sim at times that vary from run to run."""
+    endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
+    with SimProcess(TEAM.source, endpoint=endpoint, speed="max", lockstep=True), \
+            GcsApp(TEAM, zenoh_settings=ZenohSettings(connect=(endpoint,)), sim_clock=True,
+                   lockstep=True) as app:
+        assert app.runtime.setpoints_per_tick == 1
+        app.start()
+        play(Scenario(name="up", steps=(Step(action="arm"), Step(action="takeoff"))),
+             app.runtime, app.clock)
+        assert app.runtime.phase is Phase.HOVER
+        app.clock.sleep_until(app.clock.now() + 1.0)
+        assert app.runtime.resends == 0
