@@ -87,6 +87,11 @@ class RuntimeSnapshot:
     truth: SimTruth | None = None  # simulation only: the ground truth of this tick
 
 
+_ON_GCS_SETPOINTS = frozenset({Phase.HOVER, Phase.LIFTING, Phase.FORMATION,
+                               Phase.SETTING_DOWN})
+"""Phases in which every vehicle must stay in the mode that flies the GCS's setpoints."""
+
+
 class Runtime:
     """The formation loop of one team.
 
@@ -121,6 +126,8 @@ class Runtime:
         self.analysis: Analysis = analysis if analysis is not None else analyze(team)
         self._accel_last = 0.0
         self.period = 1.0 / team.config.guidance.rate_hz
+        self._streaming_modes = tuple(profiles[vid].streaming_mode for vid in self.ids)
+        self._landing_modes = tuple(profiles[vid].landing_modes for vid in self.ids)
         self.setpoints_per_tick = (team.config.guidance.setpoints_per_tick
                                    if setpoints_per_tick is None else setpoints_per_tick)
         if self.setpoints_per_tick < 1:
@@ -308,15 +315,25 @@ class Runtime:
         """One guidance tick; never raises for a vehicle's fault."""
         started, started_cpu = time.perf_counter(), time.thread_time()
         now = self.clock.now()
+        # The phase before the fleet: a phase entered once every vehicle confirmed its mode
+        # then never meets telemetry older than that confirmation.
+        phase = self.phase
         fleet = read_fleet(self.ids, self.profiles, now)
-        if self.phase is Phase.CONNECT:  # presence is the pre-flight check's business
+        if phase is Phase.CONNECT:  # presence is the pre-flight check's business
             verdict = SafetyVerdict(freeze=True, land=False, events=())
+        elif phase in _ON_GCS_SETPOINTS:
+            coming_down = np.array([m in landing for m, landing in
+                                    zip(fleet.modes, self._landing_modes, strict=True)])
+            verdict = evaluate(self.team.config.safety, self.ids, fleet.age, fleet.p_ned,
+                               safe_radius=self.safe_radius_for(self._accel_last),
+                               modes=fleet.modes, expected=self._streaming_modes,
+                               coming_down=coming_down | ~fleet.armed)
         else:
             verdict = evaluate(self.team.config.safety, self.ids, fleet.age, fleet.p_ned,
                                safe_radius=self.safe_radius_for(self._accel_last))
         self._report_safety(verdict)
         op = self.operator.snapshot(now)
-        phase = self.phase
+        phase = self.phase  # an action may have moved it meanwhile
         self._report_modes(fleet, phase)
         if phase is Phase.CONNECT:
             self._preflight(fleet)

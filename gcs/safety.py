@@ -8,7 +8,12 @@ Every tick the loop asks :func:`evaluate` what the team may do:
 * a vehicle outside the geofence (horizontal box or ceiling): the motion freezes;
 * a vehicle farther from the team's centroid than the analysis' safe bound
   (beyond it the ropes pull harder than the horizontal force left at the bank
-  limit minus the largest commanded acceleration): the motion freezes.
+  limit minus the largest commanded acceleration): the motion freezes;
+* while the team flies on the GCS's setpoints, a vehicle that left the mode
+  that flies them (a failsafe, a pilot's switch, a lost setpoint stream): the
+  motion freezes, since the rest of the team would drag it by the ropes; one
+  that comes down on its own (a landing mode, or disarmed) lands the team,
+  which cannot hold the payload without it.
 
 Acceleration saturation lives in :func:`gcs.guidance.saturate`, the bank limit
 on board the vehicles. An unknown vehicle state (NaN) never raises here: it is
@@ -35,6 +40,8 @@ class SafetyReason(enum.Enum):
     LOST = "link lost"
     GEOFENCE = "outside the geofence"
     DEFORMATION = "deformed beyond the safe bound"
+    MODE = "left the GCS's mode"
+    COMING_DOWN = "coming down on its own"
 
     def __str__(self) -> str:
         return self.value
@@ -62,7 +69,8 @@ _OK = SafetyVerdict(freeze=False, land=False, events=())
 
 
 def evaluate(cfg: SafetyConfig, ids: Sequence[int], age: np.ndarray, p_ned: np.ndarray, *,
-             safe_radius: float) -> SafetyVerdict:
+             safe_radius: float, modes: Sequence[str] = (), expected: Sequence[str] = (),
+             coming_down: np.ndarray | None = None) -> SafetyVerdict:
     """Apply every rule to the team's latest state.
 
     Args:
@@ -72,6 +80,11 @@ def evaluate(cfg: SafetyConfig, ids: Sequence[int], age: np.ndarray, p_ned: np.n
         p_ned: (n, 3) latest NED positions, m (NaN where unknown).
         safe_radius: largest horizontal distance of a vehicle from the team's
             centroid (the analysis' safe span / 2), m.
+        modes: each vehicle's flight mode while the team flies on the GCS's
+            setpoints; empty otherwise (the mode rule does not apply).
+        expected: each vehicle's mode that flies those setpoints (with ``modes``).
+        coming_down: (n,) True where a vehicle is in a landing mode or disarmed
+            (with ``modes``).
     """
     events: list[SafetyEvent] = []
     # Masks over the whole team, then a loop over the offenders only: the loop runs
@@ -104,6 +117,18 @@ def evaluate(cfg: SafetyConfig, ids: Sequence[int], age: np.ndarray, p_ned: np.n
                                       f"vehicle {vid}: {r[i]:.2f} m from the centroid, "
                                       f"safe bound {safe_radius:.2f} m: motion frozen"))
     land = bool(lost.any())
+    for i, (mode, want) in enumerate(zip(modes, expected, strict=True)):
+        if mode == want or not fresh[i]:  # a silent vehicle is reported as such, above
+            continue
+        vid = ids[i]
+        if coming_down is not None and coming_down[i]:
+            land = True
+            events.append(SafetyEvent(SafetyReason.COMING_DOWN, vid,
+                                      f"vehicle {vid}: coming down on its own ({mode}): "
+                                      f"landing the team"))
+        else:
+            events.append(SafetyEvent(SafetyReason.MODE, vid, f"vehicle {vid}: in {mode}, not "
+                                      f"{want}: motion frozen"))
     if not events:
         return _OK
     return SafetyVerdict(freeze=True, land=land, events=tuple(events))

@@ -109,3 +109,35 @@ def test_unknown_position_does_not_raise() -> None:
     p[2] = np.nan
     v = evaluate(SAFE, IDS, np.full(4, 0.1), p, safe_radius=0.79)
     assert v.freeze and v.events[0].reason is SafetyReason.STALE
+
+
+OFFBOARD = ("OFFBOARD",) * 4
+
+
+def test_a_vehicle_out_of_the_gcs_mode_freezes_the_motion() -> None:
+    modes = ("OFFBOARD", "OFFBOARD", "HOLD", "OFFBOARD")
+    v = evaluate(SAFE, IDS, np.full(4, 0.1), SQUARE, safe_radius=0.79, modes=modes,
+                 expected=OFFBOARD, coming_down=np.zeros(4, dtype=bool))
+    assert v.freeze and not v.land
+    assert [(e.reason, e.vehicle) for e in v.events] == [(SafetyReason.MODE, 3)]
+    assert v.events[0].text == "vehicle 3: in HOLD, not OFFBOARD: motion frozen"
+    # all in the mode: nothing to report
+    v = evaluate(SAFE, IDS, np.full(4, 0.1), SQUARE, safe_radius=0.79, modes=OFFBOARD,
+                 expected=OFFBOARD, coming_down=np.zeros(4, dtype=bool))
+    assert v.events == ()
+
+
+def test_a_vehicle_coming_down_on_its_own_lands_the_team() -> None:
+    modes = ("GUIDED", "LAND", "GUIDED", "GUIDED")
+    v = evaluate(SAFE, IDS, np.full(4, 0.1), SQUARE, safe_radius=0.79, modes=modes,
+                 expected=("GUIDED",) * 4, coming_down=np.array([False, True, False, False]))
+    assert v.freeze and v.land
+    assert [(e.reason, e.vehicle) for e in v.events] == [(SafetyReason.COMING_DOWN, 2)]
+    assert v.events[0].text == "vehicle 2: coming down on its own (LAND): landing the team"
+
+
+def test_a_silent_vehicle_is_reported_silent_not_out_of_mode() -> None:
+    modes = ("OFFBOARD", "unknown", "OFFBOARD", "OFFBOARD")
+    v = evaluate(SAFE, IDS, np.array([0.1, np.inf, 0.1, 0.1]), SQUARE, safe_radius=0.79,
+                 modes=modes, expected=OFFBOARD, coming_down=np.ones(4, dtype=bool))
+    assert [(e.reason, e.vehicle) for e in v.events] == [(SafetyReason.LOST, 2)]

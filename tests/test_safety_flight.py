@@ -15,6 +15,7 @@ import pytest
 from gcs.app import GcsApp
 from gcs.config import load_team
 from gcs.link import keys
+from gcs.link.modes import SimMode
 from gcs.link.zenoh_session import ZenohSettings
 from gcs.phases import Action, Phase
 from gcs.safety import SafetyReason
@@ -98,3 +99,25 @@ def test_abort_holds_then_lands(flying: GcsApp) -> None:
     assert app.runtime.snapshot.demand.forward == 0.0
     app.clock.sleep_until(app.clock.now() + TEAM.config.flight.abort_hold + 1.0)
     assert app.runtime.phase in (Phase.LANDING, Phase.LANDED)
+
+
+def test_a_vehicle_leaving_offboard_freezes_then_its_landing_lands_the_team(
+        flying: GcsApp) -> None:
+    """As when a pilot flips one vehicle's mode switch: a real MAVLink mode command."""
+    app = flying
+    hold_sticks(app, 1.0)
+    app.links.profiles[2].set_mode(SimMode.HOLD)
+    hold_sticks(app, 0.5)
+    snap = app.runtime.snapshot
+    assert snap.safety.freeze and not snap.safety.land
+    assert [(e.reason, e.vehicle) for e in snap.safety.events] == [(SafetyReason.MODE, 2)]
+    assert snap.demand.forward == 0.0  # the stick is held, the motion frozen
+    assert snap.phase is Phase.FORMATION
+    assert any(e.text == "vehicle 2: in HOLD, not OFFBOARD: motion frozen"
+               for e in app.runtime.events())
+
+    app.links.profiles[2].land()
+    hold_sticks(app, 0.5)
+    assert app.runtime.phase in (Phase.ABORTING, Phase.LANDING, Phase.LANDED)
+    assert any(e.text == "vehicle 2: coming down on its own (LAND): landing the team"
+               for e in app.runtime.events())

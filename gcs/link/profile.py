@@ -55,6 +55,16 @@ class AutopilotProfile(Protocol):
         """Channels of the setpoints this profile sends."""
         ...
 
+    @property
+    def streaming_mode(self) -> str:
+        """:meth:`mode_text` of the mode that flies the GCS's setpoints (e.g. ``OFFBOARD``)."""
+        ...
+
+    @property
+    def landing_modes(self) -> frozenset[str]:
+        """:meth:`mode_text` of the modes in which the vehicle comes down on its own."""
+        ...
+
     def mode_text(self, heartbeat: Heartbeat | None = None) -> str:
         """Flight mode of ``heartbeat`` (default: the latest), readable; ``"unknown"`` if none."""
         ...

@@ -54,6 +54,9 @@ class ArduPilotProfile(ProfileBase):
     """Drives ArduCopter through GUIDED; see the module docstring."""
 
     expected_autopilots = frozenset({mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA})
+    streaming_mode = CopterMode.GUIDED.name
+    landing_modes = frozenset(m.name for m in (CopterMode.LAND, CopterMode.RTL,
+                                               CopterMode.SMART_RTL))
 
     def __init__(self, link: Link, *, confirm_timeout_s: float = 3.0,
                  vertical: VerticalPd | None = None, max_position_age_s: float = 0.5) -> None:

@@ -65,6 +65,10 @@ class Px4Profile(ProfileBase):
     """Drives PX4 through OFFBOARD; see the module docstring."""
 
     expected_autopilots = frozenset({mavlink.MAV_AUTOPILOT_PX4})
+    streaming_mode = Px4MainMode.OFFBOARD.name
+    landing_modes = frozenset(f"AUTO.{m.name}" for m in (Px4AutoSubMode.LAND,
+                                                        Px4AutoSubMode.RTL,
+                                                        Px4AutoSubMode.PRECLAND))
 
     def __init__(self, link: Link, *, confirm_timeout_s: float = 3.0, warmup_s: float = 1.2,
                  stream_rate_hz: float = 10.0, handover_s: float = 5.0) -> None:

@@ -24,6 +24,8 @@ class SimProfile(ProfileBase):
     """Drives a simulated vehicle; see the module docstring for the sequence."""
 
     expected_autopilots = frozenset({mavlink.MAV_AUTOPILOT_GENERIC})
+    streaming_mode = SimMode.OFFBOARD.name
+    landing_modes = frozenset({SimMode.LAND.name})
 
     @property
     def name(self) -> ProfileName:
