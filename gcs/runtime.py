@@ -321,7 +321,7 @@ class Runtime:
         fleet = read_fleet(self.ids, self.profiles, now)
         if phase is Phase.CONNECT:  # presence is the pre-flight check's business
             verdict = SafetyVerdict(freeze=True, land=False, events=())
-        elif phase in _ON_GCS_SETPOINTS:
+        elif phase in _ON_GCS_SETPOINTS and tuple(fleet.modes) != self._streaming_modes:
             coming_down = np.array([m in landing for m, landing in
                                     zip(fleet.modes, self._landing_modes, strict=True)])
             verdict = evaluate(self.team.config.safety, self.ids, fleet.age, fleet.p_ned,
