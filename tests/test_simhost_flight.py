@@ -157,13 +157,14 @@ def test_team_takes_off_flies_offboard_and_a_killed_vehicle_vanishes(gcs: Gcs) -
         for s in sysids:
             manager.profiles[s].send_setpoint(accel_xy_ned=(0.6, 0.0), z_ned=-ALTITUDE)
         time.sleep(0.25)
-    moved_east, pitches = [], []
+    moved_north, moved_east, pitches = [], [], []
     for s in sysids:
         t = manager.links[s].telemetry
         assert t.heartbeat is not None and t.heartbeat.custom_mode == SimMode.OFFBOARD
         assert t.position is not None and t.attitude is not None and t.imu is not None
         dx, dy = (t.position.p_ned[k] - start[s][k] for k in (0, 1))
         assert dx > 0.6, f"vehicle {s} moved {dx:.2f} m north"
+        moved_north.append(dx)
         moved_east.append(dy)  # no formation control here: the ropes pull each one inwards
         assert abs(t.position.p_ned[2] + ALTITUDE) < 0.15
         assert t.position.v_ned[0] > 0.5
@@ -173,7 +174,10 @@ def test_team_takes_off_flies_offboard_and_a_killed_vehicle_vanishes(gcs: Gcs) -
         # Vehicle frames block rather than drop in the sim (DROP lost 4-10 % here under load);
         # a rare gap is tolerated so that a machine stalled by other work cannot fail this.
         assert health.refused == 0 and health.loss_ratio < 0.01, health
-    assert abs(sum(moved_east) / 4) < 0.1  # but the team as a whole went straight north
+    # but the team as a whole went north: within 10 degrees (the payload still swings a
+    # little from the take-off, and nothing here holds the shape)
+    north, east = sum(moved_north) / 4, sum(moved_east) / 4
+    assert abs(east) < math.tan(math.radians(10.0)) * north, (north, east)
     assert sum(pitches) / 4 < -0.02  # each leans out against its rope; all lean forward too
 
     # Truth and clock were published all along: the payload hangs on taut ropes.
