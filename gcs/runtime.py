@@ -321,16 +321,19 @@ class Runtime:
         fleet = read_fleet(self.ids, self.profiles, now)
         if phase is Phase.CONNECT:  # presence is the pre-flight check's business
             verdict = SafetyVerdict(freeze=True, land=False, events=())
-        elif phase in _ON_GCS_SETPOINTS and tuple(fleet.modes) != self._streaming_modes:
-            coming_down = np.array([m in landing for m, landing in
-                                    zip(fleet.modes, self._landing_modes, strict=True)])
-            verdict = evaluate(self.team.config.safety, self.ids, fleet.age, fleet.p_ned,
-                               safe_radius=self.safe_radius_for(self._accel_last),
-                               modes=fleet.modes, expected=self._streaming_modes,
-                               coming_down=coming_down | ~fleet.armed)
         else:
+            # The mode rule, only where it applies and some vehicle is out of its mode
+            # (one tuple comparison per tick otherwise).
+            modes: tuple[str, ...] = ()
+            coming_down = None
+            if phase in _ON_GCS_SETPOINTS and fleet.modes != self._streaming_modes:
+                modes = fleet.modes
+                coming_down = ~fleet.armed | np.array(
+                    [m in landing for m, landing in zip(modes, self._landing_modes, strict=True)])
             verdict = evaluate(self.team.config.safety, self.ids, fleet.age, fleet.p_ned,
-                               safe_radius=self.safe_radius_for(self._accel_last))
+                               safe_radius=self.safe_radius_for(self._accel_last), modes=modes,
+                               expected=self._streaming_modes if modes else (),
+                               coming_down=coming_down)
         self._report_safety(verdict)
         op = self.operator.snapshot(now)
         phase = self.phase  # an action may have moved it meanwhile

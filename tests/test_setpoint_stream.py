@@ -14,6 +14,7 @@ from collections import Counter
 
 from gcs.app import GcsApp
 from gcs.config import load_team
+from gcs.link.setpoints import SETPOINT_MESSAGE
 from gcs.link.transport import FrameDirection
 from gcs.link.zenoh_session import ZenohSettings
 from gcs.phases import Phase
@@ -21,7 +22,6 @@ from gcs.scenario import Scenario, Step, play
 from gcs.simprocess import SimProcess, free_tcp_port
 
 TEAM = load_team("configs/bebop_square.yaml")
-SETPOINT_MSGID = 84  # SET_POSITION_TARGET_LOCAL_NED
 
 
 def test_each_tick_is_followed_by_resends_and_the_vehicles_stay_offboard() -> None:
@@ -41,7 +41,7 @@ def test_each_tick_is_followed_by_resends_and_the_vehicles_stay_offboard() -> No
 
         def count(vid: int, direction: FrameDirection, frame: bytes) -> None:
             if counting.is_set() and direction is FrameDirection.OUT \
-                    and int.from_bytes(frame[7:10], "little") == SETPOINT_MSGID:
+                    and int.from_bytes(frame[7:10], "little") == SETPOINT_MESSAGE.id:
                 sent[vid] += 1
 
         for vid, link in app.links.links.items():
