@@ -27,6 +27,7 @@ import numpy as np
 from gcs.config import Team
 from gcs.formation import Formation
 from gcs.motion import MotionBasis, motion_basis
+from gcs.udi import local_frames, to_ned_saturated, udi
 
 __all__ = [
     "Guidance",
@@ -34,7 +35,6 @@ __all__ = [
     "RelativeMeasurements",
     "formation_acceleration",
     "relative_measurements",
-    "rotate_planar",
     "saturate",
 ]
 
@@ -52,7 +52,12 @@ def formation_acceleration(
     c2: float,
     lead: float,
 ) -> np.ndarray:
-    """Eq. udi for every vehicle, each in its own frame.
+    """Eq. udi for every vehicle, each in its own frame (compiled: :func:`gcs.udi.udi`).
+
+    Per edge slot, with ``q = p_i - p_j`` and its rate, the distance error is
+    predicted ``lead`` ahead to first order, ``e = ||q|| - d + lead q.q'/||q||``,
+    and the vehicle commands ``-c1 v_i + alpha_v q/||q|| + (alpha_a - c2 e)
+    q_ahead/||q_ahead||`` summed over its edges, ``q_ahead = q + lead q'``.
 
     Args:
         v_own: (n, 2) own velocity, m/s.
@@ -73,38 +78,19 @@ def formation_acceleration(
     Returns:
         (n, 2) commanded acceleration, m/s^2, in each vehicle's frame.
     """
-    q, q_rate = -rel_p, -rel_v  # p_i - p_j and its rate
-    dist = np.linalg.norm(q, axis=2)
-    valid = mask & (dist > 1e-9)
-    # distance error predicted to first order (zero rate in rigid motion) ...
-    rate = np.einsum("isk,isk->is", q, q_rate) / np.where(valid, dist, 1.0)
-    e = (dist - d + lead * rate) * valid
-    # ... and the directions the edges will have half a period ahead
-    q_ahead = q + lead * q_rate
-    n_ahead = np.linalg.norm(q_ahead, axis=2)
-    ok = valid & (n_ahead > 1e-9)
-    qhat_ahead = q_ahead / np.where(ok, n_ahead, 1.0)[..., None] * ok[..., None]
-    qhat_now = q / np.where(valid, dist, 1.0)[..., None] * valid[..., None]
-    return (
-        -c1 * v_own
-        + np.einsum("is,isk->ik", alpha_v, qhat_now)
-        + np.einsum("is,isk->ik", alpha_a - c2 * e, qhat_ahead)
-    )
+    return udi(_f64(v_own), _f64(rel_p), _f64(rel_v), np.ascontiguousarray(mask, dtype=bool),
+               _f64(d), _f64(alpha_v), _f64(alpha_a), float(c1), float(c2), float(lead))
 
 
 def saturate(u: np.ndarray, *, norm_max: float, axis_max: float) -> np.ndarray:
     """Limit each (n, 2) acceleration in norm (keeping its direction), then per axis."""
-    norm = np.linalg.norm(u, axis=1, keepdims=True)
-    u = u * np.minimum(1.0, norm_max / np.maximum(norm, 1e-12))
-    return np.clip(u, -axis_max, axis_max)
+    u = _f64(u)
+    return to_ned_saturated(u, np.zeros(len(u)), float(norm_max), float(axis_max))
 
 
-def rotate_planar(vec: np.ndarray, angle: np.ndarray) -> np.ndarray:
-    """Rotate planar vectors (n, ..., 2) by ``angle`` (n,) radians about NED down."""
-    c = np.cos(angle).reshape((-1,) + (1,) * (vec.ndim - 1))
-    s = np.sin(angle).reshape((-1,) + (1,) * (vec.ndim - 1))
-    x, y = vec[..., 0:1], vec[..., 1:2]
-    return np.concatenate((c * x - s * y, s * x + c * y), axis=-1)
+def _f64(a: np.ndarray) -> np.ndarray:
+    """float64 in C order: the one layout the kernels are compiled for."""
+    return np.ascontiguousarray(a, dtype=np.float64)
 
 
 @dataclass(frozen=True)
@@ -123,14 +109,9 @@ def relative_measurements(formation: Formation, p_ned: np.ndarray, v_ned: np.nda
     The GCS has NED telemetry; this is the one place that turns it into the
     relative, local data the guidance law is defined on.
     """
-    nb = formation.slot_neighbour
-    rel_p = (p_ned[nb] - p_ned[:, None, :]) * formation.slot_mask[..., None]
-    rel_v = (v_ned[nb] - v_ned[:, None, :]) * formation.slot_mask[..., None]
-    return RelativeMeasurements(
-        v_own=rotate_planar(v_ned, -yaw),
-        rel_p=rotate_planar(rel_p, -yaw),
-        rel_v=rotate_planar(rel_v, -yaw),
-    )
+    v_own, rel_p, rel_v = local_frames(_f64(p_ned[:, :2]), _f64(v_ned[:, :2]), _f64(yaw),
+                                       formation.slot_neighbour, formation.slot_mask)
+    return RelativeMeasurements(v_own=v_own, rel_p=rel_p, rel_v=rel_v)
 
 
 @dataclass(frozen=True)
@@ -233,5 +214,5 @@ class Guidance:
                       demand: MotionDemand) -> np.ndarray:
         """Saturated horizontal acceleration setpoints (n, 2) in NED, m/s^2."""
         meas = relative_measurements(self.formation, p_ned, v_ned, yaw)
-        u_ned = rotate_planar(self.local(meas, demand), yaw)
-        return saturate(u_ned, norm_max=self.accel_norm, axis_max=self.accel_axis)
+        return to_ned_saturated(self.local(meas, demand), _f64(yaw), self.accel_norm,
+                                self.accel_axis)

@@ -2,7 +2,7 @@
 
 Each tick (scheduled on a :class:`~gcs.clock.Clock`, wall or simulator time):
 
-1. read the fleet's latest telemetry (:func:`gcs.fleet.read_fleet`);
+1. read the fleet's latest telemetry (:class:`gcs.fleet.FleetTable`);
 2. apply the safety rules (:func:`gcs.safety.evaluate`): freeze the motion or
    land the team;
 3. take the operator's command, run the guidance (relative positions, own
@@ -38,9 +38,10 @@ import numpy as np
 from gcs.analysis import Analysis, a_safe_span, analyze
 from gcs.clock import Clock, ClockStoppedError
 from gcs.config import Team
-from gcs.fleet import FleetState, read_fleet
+from gcs.fleet import FleetState, FleetTable
 from gcs.guidance import Guidance, MotionDemand
 from gcs.link.profile import AutopilotProfile
+from gcs.link.setpoints import SETPOINT_MESSAGE, packed_setpoints
 from gcs.operator import OperatorCommand, OperatorSnapshot
 from gcs.phases import Action, Phase, PhaseError, next_phase
 from gcs.recorder import TlogRecorder, team_header
@@ -118,6 +119,13 @@ class Runtime:
         if missing:
             raise ValueError(f"no link configured for vehicle(s) {missing}")
         self.profiles = profiles
+        self._profile_list = [profiles[vid] for vid in self.ids]
+        links = [p.link for p in self._profile_list]
+        self._targets = np.array([(link.sysid, link.target_component) for link in links])
+        self._boot_times = np.array([link.boot_time for link in links])
+        self._kinds = np.array([p.setpoint_kind.type_mask for p in self._profile_list])
+        self.fleet_table = FleetTable(self.ids, profiles)
+        """The team's latest telemetry, kept current by the links (the UI reads it too)."""
         self.clock = clock
         self.operator = operator
         self.recorder = recorder
@@ -292,7 +300,7 @@ class Runtime:
         self._for_all("take off", lambda p: p.takeoff(altitude_m=h0))
         deadline = time.monotonic() + cfg.takeoff_timeout
         while True:
-            fleet = read_fleet(self.ids, self.profiles, self.clock.now())
+            fleet = self.fleet_table.read(self.clock.now())
             alt = -fleet.p_ned[:, 2]
             if np.all(np.abs(alt - h0) < cfg.altitude_tolerance):
                 break
@@ -318,7 +326,7 @@ class Runtime:
         # The phase before the fleet: a phase entered once every vehicle confirmed its mode
         # then never meets telemetry older than that confirmation.
         phase = self.phase
-        fleet = read_fleet(self.ids, self.profiles, now)
+        fleet = self.fleet_table.read(now)
         if phase is Phase.CONNECT:  # presence is the pre-flight check's business
             verdict = SafetyVerdict(freeze=True, land=False, events=())
         else:
@@ -406,13 +414,36 @@ class Runtime:
         return accel
 
     def _send_all(self, accel: np.ndarray, *, z_ned: float) -> None:
-        """One setpoint per vehicle; an error is reported once per vehicle, never raised."""
-        for i, vid in enumerate(self.ids):
+        """One setpoint per vehicle, packed for the whole fleet at once; an error is reported
+        once per vehicle, never raised, and that vehicle's setpoint is not sent."""
+        profiles = self._profile_list
+        vertical = np.empty(len(profiles))
+        for i, profile in enumerate(profiles):
             try:
-                self.profiles[vid].send_setpoint(accel_xy_ned=(float(accel[i, 0]),
-                                                               float(accel[i, 1])), z_ned=z_ned)
+                vertical[i] = profile.vertical_setpoint(z_ned)
             except Exception as exc:
-                self._warn_once(("send", vid), f"vehicle {vid}: setpoint not sent: {exc}")
+                vertical[i] = math.nan
+                self._warn_once(("send", self.ids[i]),
+                                f"vehicle {self.ids[i]}: setpoint not sent: {exc}")
+        sendable = np.isfinite(vertical) & np.isfinite(accel).all(axis=1)
+        time_ms = ((time.monotonic() - self._boot_times) * 1000.0).astype(np.int64) & 0xFFFFFFFF
+        frames = packed_setpoints(target_system=self._targets[:, 0],
+                                  target_component=self._targets[:, 1], time_boot_ms=time_ms,
+                                  accel_xy_ned=accel, vertical=np.nan_to_num(vertical),
+                                  kind=self._kinds)
+        crc_extra = SETPOINT_MESSAGE.crc_extra
+        for i, (profile, frame, ok) in enumerate(zip(profiles, frames, sendable.tolist(),
+                                                     strict=True)):
+            if not ok:
+                if np.isfinite(vertical[i]):  # a profile's own refusal is reported above
+                    self._warn_once(("send", self.ids[i]), f"vehicle {self.ids[i]}: setpoint "
+                                    f"not sent: not finite: a={accel[i]} vertical={vertical[i]}")
+                continue
+            try:
+                profile.link.send_packed(frame, crc_extra)
+            except Exception as exc:
+                self._warn_once(("send", self.ids[i]),
+                                f"vehicle {self.ids[i]}: setpoint not sent: {exc}")
 
     def resend(self) -> bool:
         """Re-send the last tick's setpoints (the altitude target's ramp moves on); False if

@@ -28,7 +28,6 @@ import numpy as np
 import viser
 
 from gcs.app import GcsApp
-from gcs.fleet import read_fleet
 from gcs.runtime import RuntimeSnapshot
 from web.actions import OperatorActions
 from web.browser_script import install_script
@@ -190,7 +189,7 @@ class WebUi:
     def _frame(self) -> None:
         app = self._app
         started = time.perf_counter()
-        fleet = read_fleet(self._view.ids, app.runtime.profiles, app.clock.now())
+        fleet = app.runtime.fleet_table.read(app.clock.now())
         snap = self._snapshot
         self._trails.add(fleet.t, fleet.p_ned)
         frame = build_frame(self._view, fleet, scale=snap.operator.demand.scale if snap else 1.0,

@@ -12,11 +12,11 @@ from gcs.link.dialect import mavlink
 __all__ = ["frame_crc"]
 
 _FAST = getattr(mavlink, "mcrf4xx", None)
+_BYTE = tuple(bytes((b,)) for b in range(256))
 
 
-def frame_crc(body: bytes | bytearray, crc_extra: int) -> int:
+def frame_crc(body: bytes | bytearray | memoryview, crc_extra: int) -> int:
     """Checksum of a frame's ``body`` (bytes after the start marker, before the checksum)."""
-    data = bytes(body) + bytes((crc_extra,))
-    if _FAST is not None:
-        return int(_FAST(data, 0xFFFF))
-    return int(mavlink.x25crc(data).crc)
+    if _FAST is not None:  # chained: the body is not copied to append one byte
+        return int(_FAST(_BYTE[crc_extra], _FAST(body, 0xFFFF)))
+    return int(mavlink.x25crc(bytes(body) + _BYTE[crc_extra]).crc)

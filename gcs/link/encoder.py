@@ -8,21 +8,27 @@ use) and the simulated vehicles' endpoint (their own system id, component 1).
 
 from __future__ import annotations
 
+import functools
+import re
 import struct
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
+
+import numpy as np
 
 from gcs.link.crc import frame_crc
 from gcs.link.dialect import MavMessage, mavlink
 from gcs.link.signing import SigningKey, signature, signing_timestamp
 
-__all__ = ["DEFAULT_GCS_COMPONENT_ID", "DEFAULT_GCS_SYSTEM_ID", "MavlinkEncoder"]
+__all__ = ["DEFAULT_GCS_COMPONENT_ID", "DEFAULT_GCS_SYSTEM_ID", "MavlinkEncoder", "frame_dtype",
+           "packed_frames"]
 
 DEFAULT_GCS_SYSTEM_ID = 245
 """The GCS's own MAVLink system id unless configured otherwise."""
 
 _HEADER = struct.Struct("<BBBBBBBHB")
+_HEADER_SIZE = _HEADER.size
 _CRC = struct.Struct("<H")
 _SIGNATURE_STAMP = struct.Struct("<BQ")
 _IFLAG_SIGNED = mavlink.MAVLINK_IFLAG_SIGNED
@@ -30,6 +36,55 @@ _IFLAG_SIGNED = mavlink.MAVLINK_IFLAG_SIGNED
 
 DEFAULT_GCS_COMPONENT_ID = mavlink.MAV_COMP_ID_MISSIONPLANNER
 """The GCS's component id (190, ``MAV_COMP_ID_MISSIONPLANNER``, a ground station)."""
+
+
+@functools.cache
+def _frame_struct(message_type: type[MavMessage]) -> struct.Struct:
+    """Header and full payload of ``message_type`` in one struct: one pack call per frame."""
+    return struct.Struct(_HEADER.format + message_type.unpacker.format.lstrip("<"))
+
+
+_NUMPY_CODES = {"b": "i1", "B": "u1", "h": "<i2", "H": "<u2", "i": "<i4", "I": "<u4",
+                "q": "<i8", "Q": "<u8", "f": "<f4", "d": "<f8"}
+
+
+@functools.cache
+def frame_dtype(message_type: type[MavMessage]) -> np.dtype:
+    """numpy layout of a packed frame of ``message_type``: the header, then the payload fields.
+
+    Header fields are ``marker``, ``length``, ``incompat``, ``compat``, ``seq``,
+    ``sysid``, ``compid``, ``msgid_lo``, ``msgid_hi``; payload fields have
+    their MAVLink names. Scalar fields only.
+    """
+    codes = re.findall(r"(\d*)([a-zA-Z])", message_type.unpacker.format.lstrip("<"))
+    if any(count or code not in _NUMPY_CODES for count, code in codes):
+        raise ValueError(f"{message_type.msgname}: only messages of scalar numeric fields "
+                         "can be packed in bulk")
+    header = [("marker", "u1"), ("length", "u1"), ("incompat", "u1"), ("compat", "u1"),
+              ("seq", "u1"), ("sysid", "u1"), ("compid", "u1"), ("msgid_lo", "<u2"),
+              ("msgid_hi", "u1")]
+    fields = [(name, _NUMPY_CODES[code]) for name, (_count, code)
+              in zip(message_type.ordered_fieldnames, codes, strict=True)]
+    return np.dtype(header + fields)
+
+
+def packed_frames(message_type: type[MavMessage], n: int,
+                  fields: Mapping[str, np.ndarray | float]) -> list[bytes]:
+    """``n`` packed frames of ``message_type`` at once, for :meth:`MavlinkEncoder.restamp`.
+
+    ``fields``: payload field name to one value or one per frame; the others
+    are zero. Why: one numpy fill for a whole fleet's setpoints costs what
+    packing two of them one by one does.
+    """
+    rows = np.zeros(n, frame_dtype(message_type))
+    rows["marker"] = mavlink.PROTOCOL_MARKER_V2
+    rows["msgid_lo"] = message_type.id & 0xFFFF
+    rows["msgid_hi"] = message_type.id >> 16
+    for name, value in fields.items():
+        rows[name] = value
+    size = rows.dtype.itemsize
+    data = rows.tobytes()
+    return [data[k:k + size] for k in range(0, n * size, size)]
 
 
 def _check_id(name: str, value: int) -> int:
@@ -89,17 +144,28 @@ class MavlinkEncoder:
         fields only. Why: building a pymavlink message costs several times the
         bytes it yields, and the loop sends one setpoint per vehicle per tick.
         """
-        payload = message_type.unpacker.pack(*values)
-        payload = payload.rstrip(b"\0") or payload[:1]  # MAVLink 2 drops trailing zeros
         msgid = message_type.id
+        packed = _frame_struct(message_type).pack(mavlink.PROTOCOL_MARKER_V2, 0, 0, 0, 0, 0, 0,
+                                                  msgid & 0xFFFF, msgid >> 16, *values)
+        return self.restamp(packed, message_type.crc_extra)
+
+    def restamp(self, packed: bytes, crc_extra: int) -> bytes:
+        """``packed`` made this sender's next frame: numbered, checksummed, signed.
+
+        ``packed`` is a MAVLink 2 header (marker and message id set; length,
+        flags, sequence and sender ids are overwritten) and the full payload,
+        without checksum, as :func:`packed_frames` builds many at once. The
+        payload's trailing zeros are dropped, as MAVLink 2 requires.
+        """
+        if packed[-1] == 0:  # rare: most messages end in a non-zero field
+            packed = packed[:_HEADER_SIZE] + (packed[_HEADER_SIZE:].rstrip(b"\0") or b"\0")
         mav = self._mav
         with self._lock:
             signed = self._signed
-            head = _HEADER.pack(mavlink.PROTOCOL_MARKER_V2, len(payload),
-                                _IFLAG_SIGNED if signed else 0, 0, mav.seq, mav.srcSystem,
-                                mav.srcComponent, msgid & 0xFFFF, msgid >> 16)
-            frame = head + payload
-            frame += _CRC.pack(frame_crc(frame[1:], message_type.crc_extra))
+            frame = (packed[:1] + bytes((len(packed) - _HEADER_SIZE, _IFLAG_SIGNED if signed else 0,
+                                         0, mav.seq, mav.srcSystem, mav.srcComponent))
+                     + packed[7:])
+            frame += _CRC.pack(frame_crc(frame[1:], crc_extra))
             if signed:
                 signing = mav.signing
                 signing.timestamp = max(signing.timestamp,

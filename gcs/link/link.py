@@ -27,7 +27,7 @@ from gcs.link.errors import CommandAck, CommandError, CommandResult, LinkError
 from gcs.link.health import LinkHealth, SequenceTracker
 from gcs.link.setpoints import SETPOINT_MESSAGE, accel_setpoint_fields
 from gcs.link.signing import SigningKey
-from gcs.link.telemetry import Telemetry, TelemetryStore
+from gcs.link.telemetry import Record, Telemetry, TelemetryStore
 from gcs.link.transport import FrameDirection, Transport
 
 __all__ = ["DEFAULT_TELEMETRY_RATES_HZ", "Link"]
@@ -109,6 +109,7 @@ class Link:
         self._command_lock = threading.Lock()
         self._send_lock = threading.Lock()
         self._message_listeners: list[Callable[[MavMessage], None]] = []
+        self._record_listeners: list[Callable[[Record], None]] = []
         self._frame_listeners: list[Callable[[FrameDirection, bytes], None]] = []
         self._stop = threading.Event()
         self._started = False
@@ -233,6 +234,14 @@ class Link:
         """Call ``callback(msg)`` for every message from the vehicle (on the receive thread)."""
         self._message_listeners.append(callback)
 
+    def add_record_listener(self, callback: Callable[[Record], None]) -> None:
+        """Call ``callback(record)`` with every new telemetry record (on the receive thread).
+
+        Why: a fleet-wide table kept current here lets the loop read a hundred
+        vehicles at once instead of taking a snapshot of each link per tick.
+        """
+        self._record_listeners.append(callback)
+
     def add_frame_listener(self, callback: Callable[[FrameDirection, bytes], None]) -> None:
         """Call ``callback(direction, frame)`` for every accepted frame in and every frame out.
 
@@ -249,15 +258,25 @@ class Link:
 
     def send_message(self, msg: MavMessage) -> None:
         """Encode (and sign) ``msg`` as the GCS and send it; non-blocking."""
-        self._send_frame(lambda: self._encoder.encode(msg))
+        self._send_frame(self._encoder.encode, msg)
 
-    def _send_frame(self, encode: Callable[[], bytes]) -> None:
+    def send_packed(self, packed: bytes, crc_extra: int) -> None:
+        """Send a frame packed elsewhere (:func:`gcs.link.encoder.packed_frames`) as the
+        GCS's next frame on this link: numbered, checksummed and signed here."""
+        self._send_frame(self._encoder.restamp, packed, crc_extra)
+
+    @property
+    def boot_time(self) -> float:
+        """Monotonic time (s) that the ``time_boot_ms`` of the GCS's frames counts from."""
+        return self._t0
+
+    def _send_frame(self, encode: Callable[..., bytes], *args: object) -> None:
         if self._stop.is_set():
             raise LinkError(self._sysid, "link is closed")
         # The loop, the service thread and commands all send: encoding gives the
         # sequence number, so encode and send as one step or the vehicle sees a loss.
         with self._send_lock:  # listeners too: the recorder keeps frames in sequence order
-            frame = encode()
+            frame = encode(*args)
             self._transport.send(frame)
             for listener in self._frame_listeners:
                 self._call(listener, FrameDirection.OUT, frame)
@@ -273,7 +292,7 @@ class Link:
             target_system=self._sysid, target_component=self._target_component,
             time_boot_ms=self._time_boot_ms(), accel_xy_ned=accel_xy_ned, z_ned=z_ned,
             az_ned=az_ned)
-        self._send_frame(lambda: self._encoder.encode_fields(SETPOINT_MESSAGE, *values))
+        self._send_frame(self._encoder.encode_fields, SETPOINT_MESSAGE, *values)
 
     def send_timesync(self) -> None:
         """Send a TIMESYNC probe; its answer updates the round-trip time."""
@@ -362,14 +381,18 @@ class Link:
         now = self._clock()
         replies: list[MavMessage] = []
         mine: list[MavMessage] = []
+        records: list[Record] = []
         with self._cond:
             for msg in messages:
-                if self._accept(msg, now, replies):
+                if self._accept(msg, now, replies, records):
                     mine.append(msg)
             self._cond.notify_all()
         for msg in messages:
             for frame_listener in self._frame_listeners:
                 self._call(frame_listener, FrameDirection.IN, bytes(msg.get_msgbuf()))
+        for record in records:
+            for record_listener in self._record_listeners:
+                self._call(record_listener, record)
         for msg in mine:
             for listener in self._message_listeners:
                 self._call(listener, msg)
@@ -379,7 +402,8 @@ class Link:
             except LinkError:
                 break  # closed meanwhile
 
-    def _accept(self, msg: MavMessage, now: float, replies: list[MavMessage]) -> bool:
+    def _accept(self, msg: MavMessage, now: float, replies: list[MavMessage],
+                records: list[Record]) -> bool:
         """Account one message under the lock; False if it is not from the vehicle."""
         src = msg.get_srcSystem()
         if src != self._sysid:
@@ -404,7 +428,9 @@ class Link:
                 self._timesync_sent.remove(msg.ts1)
                 self._rtt_s = (time.monotonic_ns() - msg.ts1) / 1e9
         else:
-            self._store.update(msg, now)
+            record = self._store.update(msg, now)
+            if record is not None:
+                records.append(record)
         return True
 
     def _await_ack(self, pending: _PendingCommand, timeout_s: float) -> CommandResult | None:

@@ -88,6 +88,16 @@ class AutopilotProfile(Protocol):
         """
         ...
 
+    def vertical_setpoint(self, z_ned: float) -> float:
+        """The vertical channel (:attr:`setpoint_kind`) of the next setpoint for target ``z_ned``.
+
+        z itself (m, down) for x/y acceleration with z position; the down
+        acceleration (m/s^2) of the profile's own altitude loop for acceleration
+        only. Called once per setpoint sent: the loop packs a whole fleet's
+        setpoints at once and sends them with :meth:`Link.send_packed`.
+        """
+        ...
+
     def send_setpoint(self, *, accel_xy_ned: tuple[float, float], z_ned: float) -> None:
         """Send horizontal acceleration (m/s^2) and the z to hold (down, m); non-blocking."""
         ...
@@ -112,6 +122,14 @@ class ProfileBase:
     def link(self) -> Link:
         """The vehicle's link."""
         return self._link
+
+    def send_setpoint(self, *, accel_xy_ned: tuple[float, float], z_ned: float) -> None:
+        """Horizontal acceleration plus the profile's vertical channel for ``z_ned``."""
+        vertical = self.vertical_setpoint(z_ned)  # type: ignore[attr-defined]
+        if self.setpoint_kind is SetpointKind.ACCEL:  # type: ignore[attr-defined]
+            self._link.send_setpoint(accel_xy_ned=accel_xy_ned, az_ned=vertical)
+        else:
+            self._link.send_setpoint(accel_xy_ned=accel_xy_ned, z_ned=vertical)
 
     def mode_text(self, heartbeat: Heartbeat | None = None) -> str:
         """Flight mode of ``heartbeat`` (default: the latest), readable; ``"unknown"`` if none.

@@ -100,12 +100,11 @@ class ArduPilotProfile(ProfileBase):
         if z_ned is not None:
             self.send_setpoint(accel_xy_ned=(0.0, 0.0), z_ned=z_ned)
 
-    def send_setpoint(self, *, accel_xy_ned: tuple[float, float], z_ned: float) -> None:
-        """Acceleration on three axes; ``afz`` from :attr:`vertical` and the latest position."""
+    def vertical_setpoint(self, z_ned: float) -> float:
+        """``afz`` from :attr:`vertical` and the latest position (acceleration on three axes)."""
         position = self._position(max_age_s=self.max_position_age_s)
-        az = self.vertical.accel_down(z_ref_ned=z_ned, z_ned=position.p_ned[2],
-                                      vz_ned=position.v_ned[2])
-        self.link.send_setpoint(accel_xy_ned=accel_xy_ned, az_ned=az)
+        return self.vertical.accel_down(z_ref_ned=z_ned, z_ned=position.p_ned[2],
+                                        vz_ned=position.v_ned[2])
 
     def set_mode(self, mode: CopterMode) -> None:
         """Any ArduCopter mode by MAV_CMD_DO_SET_MODE, confirmed."""

@@ -125,10 +125,10 @@ class Px4Profile(ProfileBase):
             raise
         self._hand_over()
 
-    def send_setpoint(self, *, accel_xy_ned: tuple[float, float], z_ned: float) -> None:
-        """x/y acceleration plus z position; takes over from the warm-up stream."""
+    def vertical_setpoint(self, z_ned: float) -> float:
+        """z position; the loop's setpoints take over from the warm-up stream."""
         self._stop_stream()
-        self.link.send_setpoint(accel_xy_ned=accel_xy_ned, z_ned=z_ned)
+        return z_ned
 
     def set_mode(self, main: Px4MainMode, sub: Px4AutoSubMode | None = None) -> None:
         """Any PX4 mode by MAV_CMD_DO_SET_MODE, confirmed (OFFBOARD: use :meth:`start_offboard`)."""

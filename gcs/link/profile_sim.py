@@ -59,9 +59,9 @@ class SimProfile(ProfileBase):
         self.link.send_setpoint(accel_xy_ned=(0.0, 0.0), z_ned=z)
         self._set_mode(SimMode.OFFBOARD, what="OFFBOARD")
 
-    def send_setpoint(self, *, accel_xy_ned: tuple[float, float], z_ned: float) -> None:
-        """x/y acceleration plus z position."""
-        self.link.send_setpoint(accel_xy_ned=accel_xy_ned, z_ned=z_ned)
+    def vertical_setpoint(self, z_ned: float) -> float:
+        """z position: the vehicle holds altitude itself."""
+        return z_ned
 
     def set_mode(self, mode: SimMode) -> None:
         """Any :class:`SimMode` by MAV_CMD_DO_SET_MODE, confirmed."""

@@ -18,7 +18,10 @@ import math
 from dataclasses import dataclass
 from enum import Enum, IntFlag
 
+import numpy as np
+
 from gcs.link.dialect import MavMessage, mavlink
+from gcs.link.encoder import packed_frames
 
 __all__ = [
     "MASK_ACCEL",
@@ -29,6 +32,7 @@ __all__ = [
     "TypeMask",
     "accel_setpoint_fields",
     "accel_setpoint_message",
+    "packed_setpoints",
     "read_setpoint",
 ]
 
@@ -111,6 +115,25 @@ def accel_setpoint_fields(*, target_system: int, target_component: int, time_boo
         mask, z, az = MASK_ACCEL, 0.0, vertical
     return (time_boot_ms & 0xFFFFFFFF, 0.0, 0.0, z, 0.0, 0.0, 0.0, ax, ay, az, 0.0, 0.0, mask,
             target_system, target_component, mavlink.MAV_FRAME_LOCAL_NED)
+
+
+def packed_setpoints(*, target_system: np.ndarray, target_component: np.ndarray,
+                     time_boot_ms: np.ndarray, accel_xy_ned: np.ndarray, vertical: np.ndarray,
+                     kind: np.ndarray) -> list[bytes]:
+    """A fleet's setpoints packed at once, one per row, for :meth:`Link.send_packed`.
+
+    Per vehicle: ``accel_xy_ned`` (n, 2) m/s^2, ``vertical`` (n,) the z (m, down)
+    or the down acceleration (m/s^2) as the ``kind`` (n,) type mask says
+    (:data:`MASK_ACCEL_XY_POS_Z` or :data:`MASK_ACCEL`). Values must be finite
+    (the caller checks: a refused row must not reach the vehicle at all).
+    """
+    z_channel = kind == MASK_ACCEL_XY_POS_Z
+    return packed_frames(SETPOINT_MESSAGE, len(kind), {
+        "time_boot_ms": time_boot_ms, "z": np.where(z_channel, vertical, 0.0),
+        "afx": accel_xy_ned[:, 0], "afy": accel_xy_ned[:, 1],
+        "afz": np.where(z_channel, 0.0, vertical), "type_mask": kind,
+        "target_system": target_system, "target_component": target_component,
+        "coordinate_frame": mavlink.MAV_FRAME_LOCAL_NED})
 
 
 def accel_setpoint_message(*, target_system: int, target_component: int, time_boot_ms: int,

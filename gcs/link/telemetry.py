@@ -21,6 +21,7 @@ __all__ = [
     "Heartbeat",
     "Imu",
     "LocalPosition",
+    "Record",
     "Severity",
     "StatusText",
     "SystemStatus",
@@ -132,6 +133,10 @@ class StatusText:
     received_at: float
 
 
+Record = Heartbeat | LocalPosition | Attitude | Imu | SystemStatus | StatusText
+"""Any one telemetry record."""
+
+
 @dataclass(frozen=True, slots=True)
 class Telemetry:
     """Consistent snapshot of a vehicle's latest telemetry; None where nothing arrived yet."""
@@ -167,44 +172,46 @@ class TelemetryStore:
             "STATUSTEXT": self._status_text,
         }
 
-    def update(self, msg: MavMessage, now: float) -> bool:
-        """Take ``msg`` if it is telemetry; True if a record changed."""
+    def update(self, msg: MavMessage, now: float) -> Record | None:
+        """Take ``msg`` if it is telemetry; the new record, or None if ``msg`` is not one."""
         handler = self._handlers.get(msg.get_type())
-        if handler is None:
-            return False
-        handler(msg, now)
-        return True
+        return None if handler is None else handler(msg, now)
 
     def snapshot(self) -> Telemetry:
         """The current records as one immutable snapshot."""
         return Telemetry(self.sysid, self.heartbeat, self.position, self.attitude, self.imu,
                          self.status, tuple(self._texts))
 
-    def _heartbeat(self, m: MavMessage, now: float) -> None:
+    def _heartbeat(self, m: MavMessage, now: float) -> Heartbeat:
         self.heartbeat = Heartbeat(bool(m.base_mode & SAFETY_ARMED), m.base_mode, m.custom_mode,
                                    m.system_status, m.autopilot, m.type, now)
+        return self.heartbeat
 
-    def _position(self, m: MavMessage, now: float) -> None:
+    def _position(self, m: MavMessage, now: float) -> LocalPosition:
         self.position = LocalPosition((m.x, m.y, m.z), (m.vx, m.vy, m.vz),
                                       m.time_boot_ms / 1000.0, now)
+        return self.position
 
-    def _attitude(self, m: MavMessage, now: float) -> None:
+    def _attitude(self, m: MavMessage, now: float) -> Attitude:
         rpy = (m.roll, m.pitch, m.yaw)
         self.attitude = Attitude(_quaternion_from_rpy(rpy), rpy,
                                  (m.rollspeed, m.pitchspeed, m.yawspeed),
                                  m.time_boot_ms / 1000.0, now)
+        return self.attitude
 
-    def _attitude_quaternion(self, m: MavMessage, now: float) -> None:
+    def _attitude_quaternion(self, m: MavMessage, now: float) -> Attitude:
         q = (m.q1, m.q2, m.q3, m.q4)
         self.attitude = Attitude(q, _rpy_from_quaternion(q),
                                  (m.rollspeed, m.pitchspeed, m.yawspeed),
                                  m.time_boot_ms / 1000.0, now)
+        return self.attitude
 
-    def _imu(self, m: MavMessage, now: float) -> None:
+    def _imu(self, m: MavMessage, now: float) -> Imu:
         self.imu = Imu((m.xacc, m.yacc, m.zacc), (m.xgyro, m.ygyro, m.zgyro),
                        m.time_usec / 1e6, now)
+        return self.imu
 
-    def _sys_status(self, m: MavMessage, now: float) -> None:
+    def _sys_status(self, m: MavMessage, now: float) -> SystemStatus:
         enabled = m.onboard_control_sensors_enabled
         self.status = SystemStatus(
             battery_voltage_v=m.voltage_battery / 1000.0 if m.voltage_battery != 0xFFFF else None,
@@ -214,14 +221,17 @@ class TelemetryStore:
             drop_rate_comm_pct=m.drop_rate_comm / 100.0,
             sensors_healthy=(m.onboard_control_sensors_health & enabled) == enabled,
             received_at=now)
+        return self.status
 
-    def _status_text(self, m: MavMessage, now: float) -> None:
+    def _status_text(self, m: MavMessage, now: float) -> StatusText:
         text = m.text if isinstance(m.text, str) else m.text.decode("utf-8", "replace")
         try:
             severity = Severity(m.severity)
         except ValueError:
             severity = Severity.DEBUG
-        self._texts.append(StatusText(severity, text, now))
+        record = StatusText(severity, text, now)
+        self._texts.append(record)
+        return record
 
 
 def _quaternion_from_rpy(rpy: Vec3) -> tuple[float, float, float, float]:
