@@ -163,6 +163,10 @@ class Guidance:
         self.lead = 0.5 * period if hold_compensation else 0.0
         self._coefficients: tuple[MotionDemand, tuple[np.ndarray, np.ndarray, np.ndarray]] \
             | None = None
+        # Load the compiled kernels now: the first call takes a few hundred ms, which
+        # the loop's first tick must not (it would come that late to every vehicle).
+        n = formation.n
+        self.accelerations(formation.positions, np.zeros((n, 2)), np.zeros(n), MotionDemand())
 
     @classmethod
     def from_team(cls, team: Team) -> Guidance:

@@ -143,3 +143,48 @@ def test_diagonal_stick_is_not_faster() -> None:
     g = Guidance.from_team(load_team(SQUARE))
     v = g.basis.desired_velocities(g.velocity_matrix(MotionDemand(forward=1.0, right=1.0)))
     np.testing.assert_allclose(np.linalg.norm(v, axis=1), g.max_speed)
+
+
+def reference_udi(v_own: np.ndarray, rel_p: np.ndarray, rel_v: np.ndarray, mask: np.ndarray,
+                  d: np.ndarray, alpha_v: np.ndarray, alpha_a: np.ndarray, c1: float, c2: float,
+                  lead: float) -> np.ndarray:
+    """Eq. udi with the hold compensation as array expressions (the compiled kernel's spec)."""
+    q, q_rate = -rel_p, -rel_v
+    dist = np.linalg.norm(q, axis=2)
+    unit = np.divide(q, dist[..., None], out=np.zeros_like(q), where=mask[..., None])
+    e = (dist - d + lead * np.einsum("isk,isk->is", unit, q_rate)) * mask
+    ahead = q + lead * q_rate
+    unit_ahead = np.divide(ahead, np.linalg.norm(ahead, axis=2)[..., None],
+                           out=np.zeros_like(q), where=mask[..., None])
+    return (-c1 * v_own + np.einsum("is,isk->ik", alpha_v, unit)
+            + np.einsum("is,isk->ik", alpha_a - c2 * e, unit_ahead))
+
+
+@pytest.mark.parametrize("config", [SQUARE, "configs/bebop_hexagon.yaml"])
+def test_compiled_guidance_matches_the_law_written_as_arrays(config: str) -> None:
+    """Hold-compensated eq. udi in each vehicle's frame, rotated back to NED and saturated."""
+    team = load_team(config)
+    g = Guidance.from_team(team)
+    f = g.formation
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        p = f.positions * rng.uniform(0.8, 1.2) + rng.normal(0, 0.15, f.positions.shape) + 5.0
+        v = rng.normal(0, 0.5, (f.n, 2))
+        yaw = rng.uniform(-np.pi, np.pi, f.n)
+        demand = MotionDemand(*rng.uniform(-1, 1, 3), scale=float(rng.uniform(0.8, 1.2)))
+        alpha_v, alpha_a, d = g.coefficients(demand)
+        # what each vehicle senses, in its own frame (rotation by -yaw)
+        c, s = np.cos(-yaw), np.sin(-yaw)
+        rot = np.stack((np.stack((c, -s), -1), np.stack((s, c), -1)), -2)  # (n, 2, 2)
+        nb, mask = f.slot_neighbour, f.slot_mask
+        rel_p = np.einsum("ikl,isl->isk", rot, (p[nb] - p[:, None]) * mask[..., None])
+        rel_v = np.einsum("ikl,isl->isk", rot, (v[nb] - v[:, None]) * mask[..., None])
+        v_own = np.einsum("ikl,il->ik", rot, v)
+        local = reference_udi(v_own, rel_p, rel_v, mask, d, alpha_v, alpha_a, g.c1, g.c2, g.lead)
+        np.testing.assert_allclose(
+            formation_acceleration(v_own, rel_p, rel_v, mask, d, alpha_v, alpha_a, c1=g.c1,
+                                   c2=g.c2, lead=g.lead), local, atol=1e-12)
+        ned = np.einsum("ilk,il->ik", rot, local)  # rotation back by +yaw
+        expected = saturate(ned, norm_max=g.accel_norm, axis_max=g.accel_axis)
+        np.testing.assert_allclose(g.accelerations(p, v, yaw, demand), expected, atol=1e-12)
+        assert np.linalg.norm(expected, axis=1).max() <= g.accel_norm + 1e-12

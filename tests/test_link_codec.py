@@ -21,6 +21,8 @@ from gcs.link import (
     accel_setpoint_message,
     read_setpoint,
 )
+from gcs.link.encoder import frame_dtype
+from gcs.link.setpoints import packed_setpoints
 from gcs.link.signing import SigningKey
 
 
@@ -213,6 +215,39 @@ def test_fast_framing_gives_the_bytes_pymavlink_gives(signed: bool) -> None:
     (decoded,) = FrameDecoder(datagram=True, signing_key=key,
                               wall_clock=lambda: 1.7e9).feed(frame)
     assert (decoded.x, decoded.y, decoded.z, decoded.vz) == (1.0, 2.0, -3.0, 0.0)
+
+
+@pytest.mark.parametrize("signed", [False, True])
+def test_a_fleets_packed_setpoints_are_the_frames_encoded_one_by_one(signed: bool) -> None:
+    """packed_setpoints + restamp (the loop's path) == accel_setpoint_fields + encode_fields."""
+    key = SigningKey(bytes(range(3, 35))) if signed else None
+    packed_side, single_side = ([MavlinkEncoder(system_id=245, component_id=190, signing_key=key,
+                                                wall_clock=lambda: 1.7e9) for _ in range(5)]
+                                for _ in range(2))
+    rng = np.random.default_rng(4)
+    for tick in range(60):  # wraps every sequence number
+        accel = rng.normal(0, 1, (5, 2))
+        kind = np.array([MASK_ACCEL_XY_POS_Z, MASK_ACCEL, MASK_ACCEL_XY_POS_Z, MASK_ACCEL,
+                         MASK_ACCEL_XY_POS_Z])
+        vertical = rng.normal(-1, 0.5, 5)
+        times = np.arange(5) * 1000 + tick * 250
+        frames = packed_setpoints(target_system=np.arange(1, 6), target_component=np.ones(5, int),
+                                  time_boot_ms=times, accel_xy_ned=accel, vertical=vertical,
+                                  kind=kind)
+        for i, (frame, enc) in enumerate(zip(frames, packed_side, strict=True)):
+            channel = {"z_ned": vertical[i]} if kind[i] == MASK_ACCEL_XY_POS_Z else \
+                {"az_ned": vertical[i]}
+            one = single_side[i].encode_fields(SETPOINT_MESSAGE, *accel_setpoint_fields(
+                target_system=i + 1, target_component=1, time_boot_ms=int(times[i]),
+                accel_xy_ned=(accel[i, 0], accel[i, 1]), **channel))
+            assert enc.restamp(frame, SETPOINT_MESSAGE.crc_extra) == one
+    (decoded,) = FrameDecoder(datagram=True, signing_key=key, wall_clock=lambda: 1.7e9).feed(one)
+    assert read_setpoint(decoded) is not None and decoded.target_system == 5
+
+
+def test_messages_with_array_fields_cannot_be_packed_in_bulk() -> None:
+    with pytest.raises(ValueError, match="ATTITUDE_QUATERNION: only messages of scalar"):
+        frame_dtype(v20.MAVLink_attitude_quaternion_message)
 
 
 def test_setpoint_needs_exactly_one_finite_vertical_channel() -> None:

@@ -8,9 +8,11 @@ a busy machine was enough to send the whole team into hold (seen in CI).
 
 from __future__ import annotations
 
+import contextlib
 import threading
 import time
 from collections import Counter
+from collections.abc import Iterator
 
 from gcs.app import GcsApp
 from gcs.config import load_team
@@ -24,18 +26,24 @@ from gcs.simprocess import SimProcess, free_tcp_port
 TEAM = load_team("configs/bebop_square.yaml")
 
 
-def test_each_tick_is_followed_by_resends_and_the_vehicles_stay_offboard() -> None:
-    per_tick = TEAM.config.guidance.setpoints_per_tick
-    assert per_tick == 3
+@contextlib.contextmanager
+def hovering() -> Iterator[GcsApp]:
+    """The real sim in real time and a GCS whose team has taken off and hovers."""
     endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
     with SimProcess(TEAM.source, endpoint=endpoint, speed="1"), \
             GcsApp(TEAM, zenoh_settings=ZenohSettings(connect=(endpoint,))) as app:
-        rt = app.runtime
         app.start()
-        play(Scenario(name="up", steps=(Step(action="arm"), Step(action="takeoff"))), rt,
-             app.clock)
-        assert rt.phase is Phase.HOVER
+        play(Scenario(name="up", steps=(Step(action="arm"), Step(action="takeoff"))),
+             app.runtime, app.clock)
+        assert app.runtime.phase is Phase.HOVER
+        yield app
 
+
+def test_each_tick_is_followed_by_resends_and_the_vehicles_stay_offboard() -> None:
+    per_tick = TEAM.config.guidance.setpoints_per_tick
+    assert per_tick == 3
+    with hovering() as app:
+        rt = app.runtime
         sent: Counter[int] = Counter()
         counting = threading.Event()
 
@@ -74,3 +82,20 @@ def test_lockstep_runs_send_one_setpoint_per_tick() -> None:
         assert app.runtime.phase is Phase.HOVER
         app.clock.sleep_until(app.clock.now() + 1.0)
         assert app.runtime.resends == 0
+
+
+def test_a_vehicle_whose_setpoint_cannot_be_sent_is_named_and_the_others_keep_theirs() -> None:
+    """The fleet's setpoints are packed together; one failing link costs only its own."""
+    with hovering() as app:
+        rt = app.runtime
+        sent: Counter[int] = Counter()
+        for vid, link in app.links.links.items():
+            link.add_frame_listener(
+                lambda d, f, vid=vid: sent.update([vid]) if d is FrameDirection.OUT and
+                int.from_bytes(f[7:10], "little") == SETPOINT_MESSAGE.id else None)
+        app.links.links[3].close()  # its transport is gone: every send to it fails
+        time.sleep(1.0)
+        assert sent[3] == 0
+        assert all(sent[vid] >= 8 for vid in (1, 2, 4)), sent  # 12 Hz for a second
+        texts = [e.text for e in rt.events() if "setpoint not sent" in e.text]
+        assert texts == ["vehicle 3: setpoint not sent: vehicle 3: link is closed"], texts
