@@ -40,6 +40,7 @@ from gcs.clock import Clock, ClockStoppedError
 from gcs.config import Team
 from gcs.fleet import FleetState, FleetTable
 from gcs.guidance import Guidance, MotionDemand
+from gcs.link.errors import LinkError
 from gcs.link.profile import AutopilotProfile
 from gcs.link.setpoints import SETPOINT_MESSAGE, packed_setpoints
 from gcs.operator import OperatorCommand, OperatorSnapshot
@@ -141,6 +142,7 @@ class Runtime:
         if self.setpoints_per_tick < 1:
             raise ValueError(f"setpoints_per_tick must be at least 1, got {setpoints_per_tick}")
         self._streamed: np.ndarray | None = None  # (n, 2) the last tick's setpoints, if streaming
+        self._handing_over = False  # taking off: the vehicles are switching to offboard
         self.resends = 0
         """Setpoint rounds re-sent between ticks so far."""
         self._phase = Phase.CONNECT
@@ -313,7 +315,14 @@ class Runtime:
                                    f"{cfg.takeoff_timeout:g} s")
             time.sleep(0.02)
         self.operator.reset_altitude(h0, now=self.clock.now())
-        self._for_all("offboard", lambda p: p.start_offboard(z_ned=-h0))
+        # The loop streams from here on: a vehicle confirmed in offboard must not wait
+        # for the slowest one's confirmation without setpoints (its 0.5 s timeout
+        # sent it to hold on a loaded machine).
+        self._handing_over = True
+        try:
+            self._for_all("offboard", lambda p: p.start_offboard(z_ned=-h0))
+        finally:
+            self._handing_over = False
         if self.phase is Phase.TAKING_OFF:
             self._set_phase(Phase.HOVER)
 
@@ -358,7 +367,7 @@ class Runtime:
         demand = op.demand if moving else MotionDemand(scale=op.demand.scale)
         accel = np.zeros((fleet.n, 2))
         self._streamed = None
-        if phase.streaming:
+        if self._streams(phase):
             accel = self._stream(fleet, demand, op)
             self._streamed = accel
             self._advance(phase, op, now)
@@ -423,8 +432,7 @@ class Runtime:
                 vertical[i] = profile.vertical_setpoint(z_ned)
             except Exception as exc:
                 vertical[i] = math.nan
-                self._warn_once(("send", self.ids[i]),
-                                f"vehicle {self.ids[i]}: setpoint not sent: {exc}")
+                self._not_sent(i, exc)
         sendable = np.isfinite(vertical) & np.isfinite(accel).all(axis=1)
         time_ms = ((time.monotonic() - self._boot_times) * 1000.0).astype(np.int64) & 0xFFFFFFFF
         frames = packed_setpoints(target_system=self._targets[:, 0],
@@ -436,20 +444,28 @@ class Runtime:
                                                      strict=True)):
             if not ok:
                 if np.isfinite(vertical[i]):  # a profile's own refusal is reported above
-                    self._warn_once(("send", self.ids[i]), f"vehicle {self.ids[i]}: setpoint "
-                                    f"not sent: not finite: a={accel[i]} vertical={vertical[i]}")
+                    self._not_sent(i, f"not finite: a={accel[i]} vertical={vertical[i]}")
                 continue
             try:
                 profile.link.send_packed(frame, crc_extra)
             except Exception as exc:
-                self._warn_once(("send", self.ids[i]),
-                                f"vehicle {self.ids[i]}: setpoint not sent: {exc}")
+                self._not_sent(i, exc)
+
+    def _not_sent(self, i: int, why: Exception | str) -> None:
+        """Warn once that vehicle ``i``'s setpoint was not sent, and why."""
+        vid = self.ids[i]
+        reason = why.what if isinstance(why, LinkError) else str(why)
+        self._warn_once(("send", vid), f"vehicle {vid}: setpoint not sent: {reason}")
+
+    def _streams(self, phase: Phase) -> bool:
+        """Whether the loop sends setpoints in ``phase`` (and during the offboard handover)."""
+        return phase.streaming or (phase is Phase.TAKING_OFF and self._handing_over)
 
     def resend(self) -> bool:
         """Re-send the last tick's setpoints (the altitude target's ramp moves on); False if
         the last tick streamed none or the phase stopped streaming since."""
         accel = self._streamed
-        if accel is None or not self.phase.streaming:
+        if accel is None or not self._streams(self.phase):
             return False
         self._send_all(accel, z_ned=-self.operator.snapshot(self.clock.now()).altitude)
         self.resends += 1

@@ -98,4 +98,31 @@ def test_a_vehicle_whose_setpoint_cannot_be_sent_is_named_and_the_others_keep_th
         assert sent[3] == 0
         assert all(sent[vid] >= 8 for vid in (1, 2, 4)), sent  # 12 Hz for a second
         texts = [e.text for e in rt.events() if "setpoint not sent" in e.text]
-        assert texts == ["vehicle 3: setpoint not sent: vehicle 3: link is closed"], texts
+        assert texts == ["vehicle 3: setpoint not sent: link is closed"], texts
+
+
+def test_vehicles_in_offboard_get_setpoints_while_a_slow_one_is_still_switching() -> None:
+    """The loop streams from the start of the offboard handover, not after the last switch.
+
+    Vehicle 4's switch takes 1.2 s (a slow autopilot, or a loaded machine); the
+    others, offboard already, would hold after 0.5 s without setpoints.
+    """
+    endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
+    with SimProcess(TEAM.source, endpoint=endpoint, speed="1"), \
+            GcsApp(TEAM, zenoh_settings=ZenohSettings(connect=(endpoint,))) as app:
+        slow = app.runtime.profiles[4]
+        switch = slow.start_offboard
+
+        def slow_switch(*, z_ned: float | None = None) -> None:
+            time.sleep(1.2)
+            switch(z_ned=z_ned)
+
+        slow.start_offboard = slow_switch  # type: ignore[method-assign]
+        app.start()
+        play(Scenario(name="up", steps=(Step(action="arm"), Step(action="takeoff"))),
+             app.runtime, app.clock)
+        assert app.runtime.phase is Phase.HOVER
+        time.sleep(0.3)
+        assert set(app.snapshot.fleet.modes) == {"OFFBOARD"}, app.snapshot.fleet.modes
+        dropped = [e.text for e in app.runtime.events() if "(was OFFBOARD)" in e.text]
+        assert dropped == [], dropped

@@ -169,10 +169,12 @@ def text(page, what: str) -> str:  # type: ignore[no-untyped-def]
     return page.locator(f"[data-gcs={what}]").inner_text()
 
 
-def wait_for(check: Callable[[], bool], timeout: float, what: str) -> None:
+def wait_for(check: Callable[[], bool], timeout: float, what: str,
+             explain: Callable[[], str] = lambda: "") -> None:
+    """Poll ``check``; on timeout fail naming ``what`` and what ``explain`` says."""
     deadline = time.monotonic() + timeout
     while not check():
-        assert time.monotonic() < deadline, f"timed out waiting for {what}"
+        assert time.monotonic() < deadline, f"timed out waiting for {what}; {explain()}"
         time.sleep(0.1)
 
 
@@ -254,7 +256,8 @@ def test_the_pilot_flies_the_team_with_buttons_keys_and_sticks(pilot, demo: Demo
     wait_for(lambda: banner(pilot) == "You hold control.", 10, "control taken")
     for button, phase in (("arm", "armed"), ("take off", "hover"), ("lift", "formation")):
         pilot.get_by_role("button", name=button, exact=True).click()
-        wait_for(lambda p=phase: text(pilot, "phase") == p, 40, f"phase {phase}")
+        wait_for(lambda p=phase: text(pilot, "phase") == p, 40, f"phase {phase}",
+                 lambda: situation(pilot, demo))
 
     # hotkey: hold W, the real team speeds up northwards
     keyboard = pilot.keyboard

@@ -83,6 +83,8 @@ class LinkError(RuntimeError):
 
     def __init__(self, sysid: int, what: str) -> None:
         self.sysid = sysid
+        self.what = what
+        """The text without the vehicle's name (for messages that name it already)."""
         super().__init__(f"vehicle {sysid}: {what}")
 
 
