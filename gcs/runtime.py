@@ -135,8 +135,8 @@ class Runtime:
         self.analysis: Analysis = analysis if analysis is not None else analyze(team)
         self._accel_last = 0.0
         self.period = 1.0 / team.config.guidance.rate_hz
-        self._streaming_modes = tuple(profiles[vid].streaming_mode for vid in self.ids)
-        self._landing_modes = tuple(profiles[vid].landing_modes for vid in self.ids)
+        self._streaming_modes = tuple(p.streaming_mode for p in self._profile_list)
+        self._landing_modes = tuple(p.landing_modes for p in self._profile_list)
         self.setpoints_per_tick = (team.config.guidance.setpoints_per_tick
                                    if setpoints_per_tick is None else setpoints_per_tick)
         if self.setpoints_per_tick < 1:
@@ -424,27 +424,31 @@ class Runtime:
 
     def _send_all(self, accel: np.ndarray, *, z_ned: float) -> None:
         """One setpoint per vehicle, packed for the whole fleet at once; an error is reported
-        once per vehicle, never raised, and that vehicle's setpoint is not sent."""
+        once per vehicle, never raised, and that vehicle's setpoint is not sent.
+
+        ``accel`` is finite (:meth:`_stream` zeroes what the guidance could not compute).
+        """
         profiles = self._profile_list
         vertical = np.empty(len(profiles))
+        refused: set[int] = set()
         for i, profile in enumerate(profiles):
             try:
                 vertical[i] = profile.vertical_setpoint(z_ned)
             except Exception as exc:
                 vertical[i] = math.nan
+                refused.add(i)
                 self._not_sent(i, exc)
-        sendable = np.isfinite(vertical) & np.isfinite(accel).all(axis=1)
         time_ms = ((time.monotonic() - self._boot_times) * 1000.0).astype(np.int64) & 0xFFFFFFFF
         frames = packed_setpoints(target_system=self._targets[:, 0],
                                   target_component=self._targets[:, 1], time_boot_ms=time_ms,
                                   accel_xy_ned=accel, vertical=np.nan_to_num(vertical),
                                   kind=self._kinds)
         crc_extra = SETPOINT_MESSAGE.crc_extra
-        for i, (profile, frame, ok) in enumerate(zip(profiles, frames, sendable.tolist(),
-                                                     strict=True)):
-            if not ok:
-                if np.isfinite(vertical[i]):  # a profile's own refusal is reported above
-                    self._not_sent(i, f"not finite: a={accel[i]} vertical={vertical[i]}")
+        for i, (profile, frame, value) in enumerate(zip(profiles, frames, vertical.tolist(),
+                                                        strict=True)):
+            if not math.isfinite(value):
+                if i not in refused:  # a refusal is reported above
+                    self._not_sent(i, f"vertical setpoint not finite: {value}")
                 continue
             try:
                 profile.link.send_packed(frame, crc_extra)
