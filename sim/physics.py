@@ -26,7 +26,7 @@ def samples_in(first_step: int, n_steps: int, every: int) -> int:
     return (first_step + n_steps) // every - first_step // every
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def run_physics(s: PhysicsState, prm: PhysicsParams, meas: Measurements, cmd: np.ndarray,
                 n_steps: int, gust_noise: np.ndarray, imu_noise: np.ndarray,
                 pose_noise: np.ndarray) -> None:
@@ -42,7 +42,7 @@ def run_physics(s: PhysicsState, prm: PhysicsParams, meas: Measurements, cmd: np
             sample_pose(s, prm, meas, pose_noise[k // prm.pose_every - pose_base])
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def run_lockstep(s: PhysicsState, prm: PhysicsParams, meas: Measurements, aps: AutopilotState,
                  app: AutopilotParams, n_control: int, substeps: int, gust_noise: np.ndarray,
                  imu_noise: np.ndarray, pose_noise: np.ndarray) -> None:
