@@ -23,7 +23,7 @@ from gcs.analysis import Analysis, analyze
 from gcs.clock import Clock, ExternalClock, WallClock
 from gcs.config import GuidanceConfig, Team
 from gcs.link import keys
-from gcs.link.clockwire import decode_time, encode_time
+from gcs.link.clockwire import decode_clock, encode_time
 from gcs.link.dialect import MavMessage, mavlink
 from gcs.link.discovery import Presence, PresenceEvent
 from gcs.link.encoder import MavlinkEncoder
@@ -35,6 +35,7 @@ from gcs.operator import OperatorCommand
 from gcs.recorder import TlogRecorder
 from gcs.runtime import Runtime, RuntimeSnapshot
 from gcs.simtruth import SimTruth
+from gcs.stepgate import StepGate
 
 __all__ = ["GcsApp"]
 
@@ -156,10 +157,15 @@ class GcsApp:
                                      component_id=cfg.gcs.component_id)
             self.recorder = TlogRecorder(record, encoder=encoder,
                                          epoch=time.time() - self.clock.now())
+        self.gate = StepGate(enabled=self._ack is not None)
+        """In lockstep, phase actions and a scenario act only at ticks (gcs.stepgate)."""
+        if self.gate.enabled:
+            for link in self.links.links.values():
+                link.set_pause(self.gate.pause)
         self.runtime = Runtime(team, self.links.profiles, self.clock, self.operator,
                                recorder=self.recorder, analysis=analysis,
                                truth_source=lambda: self.truth,
-                               setpoints_per_tick=1 if lockstep else None)
+                               setpoints_per_tick=1 if lockstep else None, gate=self.gate)
         if self._ack is not None:
             self._echo = _EchoCounter(self.links.links.values())
             self.runtime.add_listener(lambda snap: self._send_ack(snap.fleet.t))
@@ -173,10 +179,15 @@ class GcsApp:
 
     def _on_clock(self, sample: zenoh.Sample) -> None:
         try:
-            t = decode_time(bytes(sample.payload.to_bytes()))
+            clock = decode_clock(bytes(sample.payload.to_bytes()))
         except ValueError:
             self.clock_errors += 1
             return
+        t = clock.t
+        if self._ack is not None and clock.sent:
+            # Lockstep: the tick at t reads every payload sent before t, on every run (the
+            # clock can overtake telemetry: another priority, another callback thread).
+            self.links.wait_received(clock.sent, ECHO_WAIT)
         assert isinstance(self.clock, ExternalClock)
         if self._ack is not None and t <= self.clock.now() and self._last_ack is not None:
             # A repeated sample: the sim is waiting; our ack may have been lost.

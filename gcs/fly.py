@@ -20,6 +20,7 @@ from gcs.link.zenoh_session import ZenohSettings
 from gcs.metrics import FlightMetrics
 from gcs.scenario import Scenario, ScenarioError, Step, play
 from gcs.simprocess import SimProcess, free_tcp_port
+from gcs.stepgate import GatedClock
 
 __all__ = ["FlightResult", "fly"]
 
@@ -54,19 +55,21 @@ def fly(team: Team, scenario: Scenario, *, speed: str = "max", record: Path | No
         with GcsApp(team, zenoh_settings=settings, sim_clock=True, lockstep=sim is not None,
                     record=record) as app:
             app.add_listener(lambda snap, _truth: metrics.add(snap))
-            app.start()
 
             def show(k: int, step: Step) -> None:
                 if progress:
                     print(f"[t={app.clock.now():7.2f} s] step {k + 1}/{len(scenario.steps)}: "
                           f"{step.describe()}", file=sys.stderr, flush=True)
 
-            try:
-                play(scenario, app.runtime, app.clock, on_step=show)
-            except ScenarioError as exc:
-                error = str(exc)
-            except Exception as exc:  # the clock stopped, the sim died...
-                error = f"{type(exc).__name__}: {exc}"
+            # In lockstep the scenario acts at ticks only, so every run is the same flight.
+            with app.gate.participant():
+                app.start()
+                try:
+                    play(scenario, app.runtime, GatedClock(app.clock, app.gate), on_step=show)
+                except ScenarioError as exc:
+                    error = str(exc)
+                except Exception as exc:  # the clock stopped, the sim died...
+                    error = f"{type(exc).__name__}: {exc}"
             if sim is not None and not sim.alive():
                 error = (error or "") + " (simulator exited: " + " | ".join(
                     sim.stderr_tail[-3:]) + ")"

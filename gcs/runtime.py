@@ -26,6 +26,7 @@ worker thread, so the loop never waits on a vehicle. The latest
 from __future__ import annotations
 
 import collections
+import functools
 import math
 import threading
 import time
@@ -48,6 +49,7 @@ from gcs.phases import Action, Phase, PhaseError, next_phase
 from gcs.recorder import TlogRecorder, team_header
 from gcs.safety import SafetyVerdict, evaluate
 from gcs.simtruth import SimTruth
+from gcs.stepgate import HOLD_CAP_S, StepGate
 
 __all__ = ["Event", "Runtime", "RuntimeSnapshot", "TickStats"]
 
@@ -113,7 +115,7 @@ class Runtime:
                  operator: OperatorCommand, *, recorder: TlogRecorder | None = None,
                  analysis: Analysis | None = None,
                  truth_source: Callable[[], SimTruth | None] | None = None,
-                 setpoints_per_tick: int | None = None) -> None:
+                 setpoints_per_tick: int | None = None, gate: StepGate | None = None) -> None:
         self.team = team
         self.ids = team.formation.ids
         missing = [vid for vid in self.ids if vid not in profiles]
@@ -152,7 +154,10 @@ class Runtime:
         self._modes: dict[int, str] = {}
         self.errors = 0
         """Error events so far (the event list keeps only the recent ones)."""
-        self._pool = ThreadPoolExecutor(max_workers=max(2, len(self.ids)),
+        self.gate = gate if gate is not None else StepGate(enabled=False)
+        """Lets phase actions act only at ticks in lockstep (disabled otherwise)."""
+        # an action, one step per vehicle, and a landing the loop may start meanwhile
+        self._pool = ThreadPoolExecutor(max_workers=len(self.ids) + 2,
                                         thread_name_prefix="gcs-action")
         self._action_busy = threading.Lock()
         self._abort_at: float | None = None
@@ -258,7 +263,7 @@ class Runtime:
             return
         if not self._action_busy.acquire(blocking=False):
             raise PhaseError(f"cannot {action.text}: another action is still running")
-        self._pool.submit(self._run_action, action, target)
+        self.gate.submit(self._pool, self._run_action, action, target)
 
     def _run_action(self, action: Action, target: Phase) -> None:
         try:
@@ -284,13 +289,9 @@ class Runtime:
     def _for_all(self, what: str, fn: Callable[[AutopilotProfile], None], *,
                  quiet: bool = False) -> None:
         """Run ``fn`` on every vehicle in parallel; raise one error naming every failure."""
-        futures = {vid: self._pool.submit(fn, self.profiles[vid]) for vid in self.ids}
-        failures = []
-        for vid, fut in futures.items():
-            try:
-                fut.result()
-            except Exception as exc:
-                failures.append(f"vehicle {vid}: {exc}")
+        outcomes = self.gate.map(self._pool, fn, self._profile_list)
+        failures = [f"vehicle {vid}: {exc}" for vid, exc in zip(self.ids, outcomes, strict=True)
+                    if exc is not None]
         if failures and not quiet:
             raise RuntimeError(f"{what}: " + "; ".join(failures))
 
@@ -313,7 +314,8 @@ class Runtime:
                        if not abs(a - h0) < cfg.altitude_tolerance]
                 raise RuntimeError(f"vehicles {low} did not reach {h0:.2f} m in "
                                    f"{cfg.takeoff_timeout:g} s")
-            time.sleep(0.02)
+            if not self.gate.pause():
+                time.sleep(0.02)
         self.operator.reset_altitude(h0, now=self.clock.now())
         # The loop streams from here on: a vehicle confirmed in offboard must not wait
         # for the slowest one's confirmation without setpoints (its 0.5 s timeout
@@ -393,6 +395,11 @@ class Runtime:
                                events=self.events()[-20:],
                                truth=truth)
         self._snapshot = snap
+        # Lockstep: the phase actions and a scenario act now, while the sim stands still
+        # at this tick's time; their effects show in the next tick.
+        if not self.gate.window():
+            self._warn_once(("gate", 0), "lockstep: a phase action was still busy "
+                                         f"{HOLD_CAP_S:g} s after the tick; the sim went on")
         for listener in self._listeners:
             try:
                 listener(snap)
@@ -486,9 +493,10 @@ class Runtime:
             self._abort_at = None
             self._set_phase(Phase.LANDING)
             if self._action_busy.acquire(blocking=False):
-                self._pool.submit(self._run_action, Action.LAND, Phase.LANDING)
+                self.gate.submit(self._pool, self._run_action, Action.LAND, Phase.LANDING)
             else:  # an action is stuck: land directly
-                self._pool.submit(self._for_all, "land", lambda p: p.land(), quiet=True)
+                self.gate.submit(self._pool, functools.partial(
+                    self._for_all, "land", lambda p: p.land(), quiet=True))
 
     def _report_modes(self, fleet: FleetState, phase: Phase) -> None:
         """A vehicle changing mode on its own while the GCS streams is a warning."""
@@ -561,4 +569,5 @@ class Runtime:
 
     def close(self) -> None:
         """Stop the worker threads (does not land: that is the operator's or abort's job)."""
+        self.gate.close()
         self._pool.shutdown(wait=False, cancel_futures=True)

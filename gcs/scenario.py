@@ -121,7 +121,7 @@ def play(scenario: Scenario, runtime: Runtime, clock: Clock, *,
         now = clock.now()
         if step.action is not None:
             action = Action(step.action)
-            if runtime.phase is Phase.CONNECT:
+            if _phase(runtime) is Phase.CONNECT:
                 _wait_ready(runtime, clock, step.timeout, where)
             try:
                 runtime.request(action)
@@ -151,8 +151,19 @@ def play(scenario: Scenario, runtime: Runtime, clock: Clock, *,
             _check_not_aborted(runtime, where)
 
 
+def _phase(runtime: Runtime) -> Phase:
+    """The phase as of the last tick.
+
+    Why not the live one: in lockstep the phase actions run in the tick's window
+    beside the scenario, so what the live phase shows at a given moment of that
+    window depends on thread timing; the last tick's does not.
+    """
+    snap = runtime.snapshot
+    return snap.phase if snap is not None else runtime.phase
+
+
 def _check_not_aborted(runtime: Runtime, where: str) -> None:
-    if runtime.phase in (Phase.ABORTING, Phase.LANDING):
+    if _phase(runtime) in (Phase.ABORTING, Phase.LANDING):
         last = [e.text for e in runtime.events() if e.level != "info"]
         raise ScenarioError(f"{where}: the flight was aborted"
                             + (f" ({last[-1]})" if last else ""))
@@ -161,7 +172,7 @@ def _check_not_aborted(runtime: Runtime, where: str) -> None:
 def _wait_ready(runtime: Runtime, clock: Clock, timeout: float, where: str) -> None:
     """Wait for the pre-flight checks (every vehicle present and fresh, analysis passes)."""
     start = clock.now()
-    while runtime.phase is Phase.CONNECT:
+    while _phase(runtime) is Phase.CONNECT:
         if clock.now() - start > timeout:
             fleet = runtime.snapshot.fleet if runtime.snapshot is not None else None
             silent = [] if fleet is None else [
@@ -177,11 +188,11 @@ def _wait_phase(runtime: Runtime, clock: Clock, phase: Phase, timeout: float,
                 where: str) -> None:
     start = clock.now()
     seen_errors = runtime.errors
-    while runtime.phase is not phase:
+    while _phase(runtime) is not phase:
         if runtime.errors > seen_errors:
             last = [e.text for e in runtime.events() if e.level == "error"]
             raise ScenarioError(f"{where}: {last[-1] if last else 'an action failed'}")
         if clock.now() - start > timeout:
-            raise ScenarioError(f"{where}: still {runtime.phase.text} after {timeout:g} s "
+            raise ScenarioError(f"{where}: still {_phase(runtime).text} after {timeout:g} s "
                                 f"(waiting for {phase.text})")
         clock.sleep_until(clock.now() + runtime.period)

@@ -25,12 +25,13 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import threading
 from collections.abc import Callable, Sequence
 
 import zenoh
 
 from gcs.link import keys
-from gcs.link.clockwire import decode_time, encode_time
+from gcs.link.clockwire import decode_time, encode_clock
 from gcs.link.zenoh_session import ZenohSettings, open_session
 from gcs.link.zenoh_transport import ZenohTransport, declare_alive
 from gcs.simtruth import SimTruth
@@ -76,9 +77,18 @@ class HostFabric:
     """Opens the host's zenoh session and declares everything; :meth:`close` undoes it."""
 
     def __init__(self, settings: ZenohSettings, *, fleet: str, sysids: Sequence[int],
-                 inbox: Inbox, on_frame: Callable[[int, bytes], None]) -> None:
-        """``on_frame(index, payload)`` runs on zenoh's threads for each vehicle's payload."""
+                 inbox: Inbox, on_frame: Callable[[int, bytes], None],
+                 announce_sent: bool = False) -> None:
+        """``on_frame(index, payload)`` runs on zenoh's threads for each vehicle's payload.
+
+        ``announce_sent`` (lockstep): every clock sample carries how many payloads
+        each vehicle has published (:func:`gcs.link.clockwire.encode_clock`).
+        """
         self._fleet = keys.check_fleet(fleet)
+        self._sysids = tuple(sysids)
+        self._announce_sent = announce_sent
+        self._sent = [0] * len(self._sysids)
+        self._sent_lock = threading.Lock()  # receive threads send echoes, the loop telemetry
         self._settings = settings
         self._session = open_session(settings)
         self._links: dict[int, _VehicleLink] = {}
@@ -118,7 +128,12 @@ class HostFabric:
         """Publish a frame of vehicle ``index`` (dropped once the vehicle is gone)."""
         link = self._links.get(index)
         if link is not None:
-            link.transport.send(frame)
+            if self._announce_sent:
+                with self._sent_lock:  # counted with the send: a sample never announces less
+                    link.transport.send(frame)
+                    self._sent[index] += 1
+            else:
+                link.transport.send(frame)
 
     def drop_vehicle(self, index: int) -> None:
         """Vehicle ``index`` is gone: close its link and undeclare its token."""
@@ -127,8 +142,13 @@ class HostFabric:
             link.close()
 
     def publish_clock(self, t: float) -> None:
-        """Publish the sim time."""
-        self._clock.put(encode_time(t))
+        """Publish the sim time (with each vehicle's payload count when announcing)."""
+        if not self._announce_sent:
+            self._clock.put(encode_clock(t))
+            return
+        with self._sent_lock:
+            sent = dict(zip(self._sysids, self._sent, strict=True))
+        self._clock.put(encode_clock(t, sent))
 
     def publish_truth(self, truth: SimTruth) -> None:
         """Publish one ground-truth sample."""

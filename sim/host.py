@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import functools
 import logging
+import math
 import time
 from enum import Enum
 from pathlib import Path
@@ -96,7 +97,9 @@ class SimHost:
         self._inbox = Inbox()
         self._status = [VehicleStatus.LIVE] * len(self._sysids)
         self._pacer = Pacer(options.speed)
-        self._acked = 0.0
+        # lockstep: nothing past the first chunk runs before a GCS acks its first tick, so
+        # what the GCS sees does not depend on when it connected
+        self._acked = -math.inf
         self._stopping = False
         self._next_truth = 0.0
         self._udp: UdpPorts | None = None
@@ -109,7 +112,8 @@ class SimHost:
             for k, sysid in enumerate(self._sysids)]
         self._fabric = HostFabric(options.zenoh_settings(),
                                   fleet=options.fleet or cfg.gcs.fleet, sysids=self._sysids,
-                                  inbox=self._inbox, on_frame=self._receive)
+                                  inbox=self._inbox, on_frame=self._receive,
+                                  announce_sent=options.lockstep)
         try:
             if options.udp:
                 self._udp = UdpPorts(len(self._sysids), base_port=options.udp_base_port,

@@ -41,6 +41,8 @@ from gcs.link import (
     read_setpoint,
     watch_alive,
 )
+from gcs.link.clockwire import ClockSample, decode_clock, encode_clock
+from gcs.link.zenoh_transport import FleetReceiver
 
 FLEET = "linktest"
 
@@ -339,3 +341,44 @@ def test_one_thread_sends_every_links_heartbeat_spread_over_the_period(fabric: F
     assert min(counts) >= 3 and max(counts) <= 6, counts  # 0.5 s period over 2.2 s
     firsts = sorted(heard[s][0] for s in ids)
     assert firsts[-1] - firsts[0] > 0.3  # spread over the period, not one burst
+
+
+def test_fleet_receiver_waits_for_the_payloads_a_clock_sample_announces(fabric: Fabric) -> None:
+    """A lockstep sim's clock sample counts each vehicle's payloads; the GCS waits for them."""
+    receiver = FleetReceiver(fabric.gcs, fleet=FLEET, direction=keys.Direction.FROM_VEHICLE)
+    got: list[bytes] = []
+    receiver.register(5, got.append)
+    vehicle = ZenohTransport.for_vehicle(fabric.sim, fleet=FLEET, sysid=5)
+    other = ZenohTransport.for_vehicle(fabric.sim, fleet=FLEET, sysid=6)  # not registered
+    try:
+        eventually(lambda: bool(got), "the route up", action=lambda: vehicle.send(b"x"))
+        # 40 more, sent in a burst: the wait ends once the last one is handled, not before
+        before = len(got)
+        sample = decode_clock(encode_clock(1.0, {5: before + 40, 6: 1000}))
+        for k in range(40):
+            vehicle.send(bytes([k]))
+        assert receiver.wait_received(sample.sent, 5.0) is True
+        assert len(got) == before + 40  # vehicle 6 is nobody's here: not waited for
+        # two announced that never come (lost, or sent before this GCS subscribed): one
+        # bounded wait, then written off
+        t0 = time.monotonic()
+        assert receiver.wait_received({5: before + 42}, 0.2) is False
+        assert 0.15 < time.monotonic() - t0 < 2.0
+        assert receiver.wait_received({5: before + 42}, 0.2) is True
+        vehicle.send(b"y")
+        assert receiver.wait_received({5: before + 43}, 5.0) is True
+    finally:
+        vehicle.close()
+        other.close()
+        receiver.close()
+
+
+def test_clock_samples_with_and_without_payload_counts() -> None:
+    assert decode_clock(encode_clock(2.5)) == ClockSample(2.5, {})
+    assert len(encode_clock(2.5)) == 8  # the plain 8-byte sample, as acks use
+    sample = decode_clock(encode_clock(0.25, {1: 7, 255: 2**32 + 3}))
+    assert sample == ClockSample(0.25, {1: 7, 255: 3})  # counts wrap at 2^32
+    with pytest.raises(ValueError, match="8 bytes plus 5 per vehicle, got 11"):
+        decode_clock(encode_clock(1.0) + b"abc")
+    with pytest.raises(ValueError, match="finite time"):
+        decode_clock(encode_clock(float("nan"), {1: 1}))

@@ -17,9 +17,10 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
+import zenoh
 
 from gcs.link import ZenohSettings, keys, open_session
-from gcs.link.clockwire import decode_time, encode_time
+from gcs.link.clockwire import decode_clock, encode_time
 from gcs.simprocess import free_tcp_port
 from gcs.simtruth import SimTruth
 from sim.__main__ import main as sim_main
@@ -96,26 +97,37 @@ def lockstep_as_a_gcs(proc: subprocess.Popen[str], ready: str, fleet: str,
                      "speed max, lockstep 0.25 s")
     session = open_session(ZenohSettings(connect=(endpoint,)))
     clock: list[tuple[float, float]] = []
+    announced: list[dict[int, int]] = []
     truth: list[SimTruth] = []
-    subs = [session.declare_subscriber(keys.clock(fleet), lambda s: clock.append(
-                (time.monotonic(), decode_time(s.payload.to_bytes())))),
+
+    def on_clock(s: zenoh.Sample) -> None:
+        sample = decode_clock(s.payload.to_bytes())
+        clock.append((time.monotonic(), sample.t))
+        announced.append(dict(sample.sent))
+
+    subs = [session.declare_subscriber(keys.clock(fleet), on_clock),
             session.declare_subscriber(keys.sim(fleet, "truth"), lambda s: truth.append(
                 SimTruth.from_bytes(s.payload.to_bytes())))]
     try:
-        # Without an ack the host stops one guidance period (0.25 s) in, and keeps
+        # Without an ack the host stands at its first chunk (nothing runs before a GCS
+        # acks, so what a GCS sees does not depend on when it joined), and keeps
         # repeating its clock so that a late GCS still learns where it is.
         eventually(lambda: len(clock) > 0 and clock[-1][0] - clock[0][0] > 0.5,
                    "clock samples while waiting")
-        assert max(t for _, t in clock) == pytest.approx(0.25)
+        assert max(t for _, t in clock) == pytest.approx(CHUNK)
         waiting = [t for w, t in clock if w > clock[-1][0] - 0.5]
-        assert len(waiting) >= 3 and set(waiting) == {0.25}
+        assert len(waiting) >= 3 and set(waiting) == {CHUNK}
+        # each sample says how many payloads every vehicle has published so far
+        assert set(announced[-1]) == {1, 2, 3, 4}
+        before = announced[-1]
         ack = session.declare_publisher(keys.clock_ack(fleet))
         ack.put(b"junk")  # ignored (logged), not fatal
         ack.put(encode_time(1.0))
         eventually(lambda: clock[-1][1] == pytest.approx(1.25), "the clock to reach 1.25 s")
         time.sleep(0.3)
         assert max(t for _, t in clock) == pytest.approx(1.25)  # and not one chunk further
-        steps = sorted({t for _, t in clock if t >= 0.25 - 1e-9})  # from the first wait on
+        assert all(announced[-1][s] > n for s, n in before.items())  # telemetry went out
+        steps = sorted({t for _, t in clock if t >= CHUNK - 1e-9})  # from the first wait on
         # the sim advances in whole chunks; clock samples are latest-wins (some may be
         # dropped under load), and it never ran past the ack (checked above)
         gaps = [(b - a) / CHUNK for a, b in itertools.pairwise(steps)]

@@ -32,7 +32,7 @@ from gcs.link import (
     keys,
     mavlink,
 )
-from gcs.link.clockwire import decode_time
+from gcs.link.clockwire import decode_clock
 from gcs.simprocess import SimProcess, SimStartError, free_tcp_port
 from gcs.simtruth import SimTruth
 from sim.control import ControlAction, ControlCommand
@@ -81,7 +81,7 @@ class Gcs:
         self.truth: list[SimTruth] = []
         self._subs = [
             self.session.declare_subscriber(keys.clock(fleet), lambda s: self.clock.append(
-                decode_time(s.payload.to_bytes()))),
+                decode_clock(s.payload.to_bytes()).t)),
             self.session.declare_subscriber(keys.sim(fleet, "truth"), lambda s: self.truth.append(
                 SimTruth.from_bytes(s.payload.to_bytes())))]
 

@@ -6,17 +6,58 @@ bytes. One sample is 8 bytes: the sim time in seconds as a little-endian
 IEEE-754 float64 (``struct.pack("<d", t)``), published on
 ``fleet/<fleet>/clock`` by the sim and on ``fleet/<fleet>/clock/ack`` by the
 GCS (:func:`gcs.link.keys.clock`, :func:`gcs.link.keys.clock_ack`).
+
+A lockstep sim appends to its clock samples, per vehicle, 5 bytes: the system
+id (uint8) and how many MAVLink payloads that vehicle has published so far
+(uint32, little-endian, modulo 2^32). Why: the clock travels at real-time
+priority and on its own callback thread, so it can overtake the telemetry sent
+before it; with the counts, a GCS can wait until it holds every payload sent
+up to that time, and a headless flight sees the same telemetry at each tick
+on every run.
 """
 
 from __future__ import annotations
 
 import math
 import struct
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 
-__all__ = ["CLOCK_FORMAT", "decode_time", "encode_time"]
+__all__ = ["CLOCK_FORMAT", "ClockSample", "decode_clock", "decode_time", "encode_clock",
+           "encode_time"]
 
 CLOCK_FORMAT = struct.Struct("<d")
 """8-byte little-endian float64 seconds."""
+
+_SENT = struct.Struct("<BI")
+"""Per vehicle after the time, in a lockstep clock sample: system id, payloads sent."""
+
+
+@dataclass(frozen=True)
+class ClockSample:
+    """A clock sample: sim time (s) and, from a lockstep sim, payloads sent per system id."""
+
+    t: float
+    sent: Mapping[int, int] = field(default_factory=dict)
+
+
+def encode_clock(t: float, sent: Mapping[int, int] | None = None) -> bytes:
+    """Clock payload for sim time ``t`` (s) with each vehicle's payload count, if given."""
+    if not sent:
+        return encode_time(t)
+    return encode_time(t) + b"".join(_SENT.pack(sysid, count & 0xFFFFFFFF)
+                                     for sysid, count in sent.items())
+
+
+def decode_clock(data: bytes) -> ClockSample:
+    """:class:`ClockSample` from a clock payload; ValueError naming what is wrong."""
+    extra = len(data) - CLOCK_FORMAT.size
+    if extra < 0 or extra % _SENT.size:
+        raise ValueError(f"clock sample must be {CLOCK_FORMAT.size} bytes plus "
+                         f"{_SENT.size} per vehicle, got {len(data)}")
+    t = decode_time(data[:CLOCK_FORMAT.size])
+    sent = dict(_SENT.iter_unpack(data[CLOCK_FORMAT.size:]))
+    return ClockSample(t, sent)
 
 
 def encode_time(t: float) -> bytes:

@@ -111,6 +111,7 @@ class Link:
         self._message_listeners: list[Callable[[MavMessage], None]] = []
         self._record_listeners: list[Callable[[Record], None]] = []
         self._frame_listeners: list[Callable[[FrameDirection, bytes], None]] = []
+        self._pause: Callable[[], bool] | None = None
         self._stop = threading.Event()
         self._started = False
         self._service: threading.Thread | None = None
@@ -217,8 +218,11 @@ class Link:
                  what: str) -> Telemetry:
         """Block until ``predicate(telemetry)`` holds; LinkError naming ``what`` on timeout."""
         deadline = time.monotonic() + timeout_s
-        with self._cond:
-            while True:
+        # Gated (lockstep): look only at ticks, the first time at the next one, so the
+        # answer does not depend on whether a message in flight has arrived yet.
+        gated = self._pause is not None and self._pause()
+        while True:
+            with self._cond:
                 snapshot = self._store.snapshot()
                 if predicate(snapshot):
                     return snapshot
@@ -226,7 +230,20 @@ class Link:
                 if remaining <= 0 or self._stop.is_set():
                     raise LinkError(self._sysid, f"timed out after {timeout_s:g} s waiting "
                                                  f"for {what}")
-                self._cond.wait(remaining)
+                if not gated:
+                    self._cond.wait(remaining)
+                    continue
+            gated = self._pause is not None and self._pause()
+
+    def set_pause(self, pause: Callable[[], bool] | None) -> None:
+        """Make :meth:`wait_for` wait with ``pause`` (True: waited for the next tick).
+
+        Why: in lockstep with the simulator the waits of phase actions must end
+        at ticks, not at whatever wall time a message happens to arrive
+        (:class:`gcs.stepgate.StepGate`). ``pause`` answering False falls back to
+        waiting on the link, as when none is set.
+        """
+        self._pause = pause
 
     # -- listeners ------------------------------------------------------------------------------
 

@@ -107,6 +107,13 @@ class LinkManager:
         """The zenoh session, if any link uses zenoh."""
         return self._session
 
+    def wait_received(self, sent: Mapping[int, int], timeout_s: float) -> bool:
+        """Block until the zenoh links hold every payload counted in ``sent`` (see
+        :meth:`FleetReceiver.wait_received`); True at once without zenoh links."""
+        if self._receiver is None:
+            return True
+        return self._receiver.wait_received(sent, timeout_s)
+
     def missing(self) -> tuple[int, ...]:
         """Configured vehicles not present (see :meth:`Discovery.missing`)."""
         return self.discovery.missing()
