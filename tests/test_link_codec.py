@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 import pytest
@@ -270,18 +269,17 @@ def test_other_position_targets_are_not_acceleration_setpoints() -> None:
     assert read_setpoint(mav.heartbeat_encode(0, 0, 0, 0, 0)) is None
 
 
-def test_encode_and_decode_are_fast_enough_for_a_fleet() -> None:
+def test_a_long_stream_round_trips_whole_with_wrapping_sequence_numbers() -> None:
+    """2000 frames (the sequence number wraps seven times): every one decodes, in order,
+    with nothing counted as garbage. Speed is bench/link_latency.py's business."""
     gcs = gcs_encoder()
     decoder = FrameDecoder(datagram=True)
     n = 2000
     msg = accel_setpoint_message(target_system=2, target_component=1, time_boot_ms=0,
                                  accel_xy_ned=(0.1, 0.2), z_ned=-1.0)
-    t0 = time.perf_counter()
-    frames = [gcs.encode(msg) for _ in range(n)]
-    t1 = time.perf_counter()
-    decoded = sum(len(decoder.feed(f)) for f in frames)
-    t2 = time.perf_counter()
-    assert decoded == n
-    # pymavlink alone: about 17 us to encode and 52 us to decode here; allow for a loaded machine.
-    assert (t1 - t0) / n < 300e-6
-    assert (t2 - t1) / n < 600e-6
+    decoded = [m for _ in range(n) for m in decoder.feed(gcs.encode(msg))]
+    assert len(decoded) == n
+    assert [m.get_seq() for m in decoded] == [k % 256 for k in range(n)]
+    assert all((m.afx, m.afy, m.z) == pytest.approx((0.1, 0.2, -1.0)) for m in decoded)
+    stats = decoder.stats()
+    assert (stats.frames, stats.garbage_bytes, stats.bad_crc) == (n, 0, 0)
