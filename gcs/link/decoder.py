@@ -21,13 +21,12 @@ from dataclasses import dataclass
 from gcs.link.crc import frame_crc
 from gcs.link.dialect import MavMessage, mavlink
 from gcs.link.signing import SIGNATURE_LEN, SignatureCheck, SignatureVerifier, SigningKey
-from gcs.link.unpack import unpack_v2
+from gcs.link.unpack import HEADER_V2, unpack_v2
 
 __all__ = ["DecodeStats", "FrameDecoder"]
 
 _MAGIC_V2 = 0xFD
 _MAGIC_V1 = 0xFE
-_HEADER_V2 = 10
 _HEADER_V1 = 6
 _IFLAG_SIGNED = 0x01
 _MSG_MAP = mavlink.mavlink_map
@@ -139,7 +138,7 @@ class FrameDecoder:
                 i = self._skip_garbage(buf, i)
                 continue
             v2 = magic == _MAGIC_V2
-            header = _HEADER_V2 if v2 else _HEADER_V1
+            header = HEADER_V2 if v2 else _HEADER_V1
             if n - i < header:
                 if not final:
                     break
@@ -248,7 +247,7 @@ def _valid_frame_after(buf: bytes | bytearray, start: int) -> bool:
         if j < 0:
             return False
         v2 = buf[j] == _MAGIC_V2
-        header = _HEADER_V2 if v2 else _HEADER_V1
+        header = HEADER_V2 if v2 else _HEADER_V1
         if n - j >= header:
             flags = buf[j + 2] if v2 else 0
             msgid = (buf[j + 7] | (buf[j + 8] << 8) | (buf[j + 9] << 16)) if v2 else buf[j + 5]

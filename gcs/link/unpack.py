@@ -18,9 +18,10 @@ import struct
 
 from gcs.link.dialect import MavMessage, mavlink
 
-__all__ = ["unpack_v2"]
+__all__ = ["HEADER_V2", "unpack_v2"]
 
-_HEADER_V2 = 10
+HEADER_V2 = 10
+"""Bytes before the payload in a MAVLink 2 frame (magic to message id)."""
 _CRC = struct.Struct("<H")
 
 
@@ -56,7 +57,7 @@ def unpack_v2(frame: bytearray, *, msgid: int, signature_len: int) -> MavMessage
     if layout is None:
         return None
     end = len(frame) - 2 - signature_len
-    payload = bytes(frame[_HEADER_V2:end])
+    payload = bytes(frame[HEADER_V2:end])
     if len(payload) < layout.size:  # MAVLink 2 dropped trailing zeros (or extensions)
         payload += bytes(layout.size - len(payload))
     fields = layout.unpack(payload[:layout.size])
