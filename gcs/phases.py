@@ -13,6 +13,9 @@
 * LIFTING raises the team by the lift height; FORMATION is operator flight;
   SETTING_DOWN lowers the team until the payload rests, back to HOVER.
 * ABORTING freezes the motion (every vehicle holds) and then lands.
+* RESUME keeps the phase: it switches the vehicles that left the streaming mode
+  on their own (a HOLD after a gap in the setpoints, a pilot's switch) back to
+  it, so the frozen motion can go on.
 
 This module is pure state: the runtime performs the actions.
 """
@@ -67,6 +70,7 @@ class Action(enum.Enum):
     SET_DOWN = "set_down"
     LAND = "land"
     ABORT = "abort"
+    RESUME = "resume"
 
     @property
     def text(self) -> str:
@@ -78,7 +82,7 @@ class PhaseError(RuntimeError):
     """An action that makes no sense in the current phase."""
 
 
-_ALLOWED: dict[Action, tuple[frozenset[Phase], Phase]] = {
+_ALLOWED: dict[Action, tuple[frozenset[Phase], Phase | None]] = {  # None: stays
     Action.ARM: (frozenset({Phase.READY}), Phase.ARMED),
     Action.DISARM: (frozenset({Phase.ARMED, Phase.LANDED}), Phase.READY),
     Action.TAKEOFF: (frozenset({Phase.ARMED}), Phase.TAKING_OFF),
@@ -88,6 +92,8 @@ _ALLOWED: dict[Action, tuple[frozenset[Phase], Phase]] = {
                   Phase.LANDING),
     Action.ABORT: (frozenset(Phase) - {Phase.CONNECT, Phase.READY, Phase.LANDED},
                    Phase.ABORTING),
+    Action.RESUME: (frozenset({Phase.HOVER, Phase.LIFTING, Phase.FORMATION,
+                               Phase.SETTING_DOWN}), None),
 }
 
 
@@ -98,4 +104,4 @@ def next_phase(phase: Phase, action: Action) -> Phase:
         options = ", ".join(sorted(p.text for p in allowed))
         raise PhaseError(f"cannot {action.text} while {phase.text} "
                          f"(possible when: {options})")
-    return target
+    return phase if target is None else target

@@ -30,7 +30,7 @@ import functools
 import math
 import threading
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
@@ -196,6 +196,11 @@ class Runtime:
         """Call ``callback(snapshot)`` after every tick (on the loop thread: keep it short)."""
         self._listeners.append(callback)
 
+    @property
+    def action_running(self) -> bool:
+        """Whether a phase action (arm, take off, land, resume...) is still running."""
+        return self._action_busy.locked()
+
     def safe_radius_for(self, accel: float) -> float:
         """Largest vehicle-to-centroid distance at which ``accel`` (m/s^2) is still available.
 
@@ -278,6 +283,8 @@ class Runtime:
             elif action is Action.LAND:
                 self._set_phase(target)
                 self._for_all("land", lambda p: p.land())
+            elif action is Action.RESUME:
+                self._resume()
         except Exception as exc:  # report, never kill the worker
             self._event("error", f"{action.text} failed: {exc}")
             if action is Action.ARM:
@@ -287,13 +294,34 @@ class Runtime:
             self._action_busy.release()
 
     def _for_all(self, what: str, fn: Callable[[AutopilotProfile], None], *,
-                 quiet: bool = False) -> None:
-        """Run ``fn`` on every vehicle in parallel; raise one error naming every failure."""
-        outcomes = self.gate.map(self._pool, fn, self._profile_list)
-        failures = [f"vehicle {vid}: {exc}" for vid, exc in zip(self.ids, outcomes, strict=True)
+                 quiet: bool = False, only: Sequence[int] | None = None) -> None:
+        """Run ``fn`` on every vehicle (or those with ids ``only``) in parallel; raise one
+        error naming every failure."""
+        ids = self.ids if only is None else tuple(only)
+        outcomes = self.gate.map(self._pool, fn, [self.profiles[vid] for vid in ids])
+        failures = [f"vehicle {vid}: {exc}" for vid, exc in zip(ids, outcomes, strict=True)
                     if exc is not None]
         if failures and not quiet:
             raise RuntimeError(f"{what}: " + "; ".join(failures))
+
+    def _resume(self) -> None:
+        """Switch back to the streaming mode the vehicles that left it while still flying.
+
+        A vehicle coming down on its own (landing, disarmed) is not resumed: that
+        one lands the team (gcs.safety).
+        """
+        fleet = self.fleet_table.read(self.clock.now())
+        out = [vid for vid, mode, want, landing, armed in zip(
+            self.ids, fleet.modes, self._streaming_modes, self._landing_modes, fleet.armed,
+            strict=True) if mode != want and mode not in landing and armed]
+        if not out:
+            self._event("info", "resume: every flying vehicle is in its streaming mode already")
+            return
+        z = -self.operator.snapshot(self.clock.now()).altitude
+        self._for_all("resume", lambda p: p.start_offboard(z_ned=z), only=out)
+        for vid in out:
+            self._event("info", f"resume: vehicle {vid} back in "
+                                f"{self.profiles[vid].streaming_mode}")
 
     def _takeoff(self) -> None:
         cfg = self.team.config.flight

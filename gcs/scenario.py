@@ -3,9 +3,10 @@ operator-command object and phase actions as the browser and the gamepad.
 
 A step does one thing:
 
-* ``action: arm|takeoff|lift|set_down|land|abort`` and waits until the phase the
-  action leads to is done (takeoff: hover; lift: formation; set_down: hover;
-  land: landed), at most ``timeout`` seconds;
+* ``action: arm|takeoff|lift|set_down|land|abort|resume`` and waits until the
+  phase the action leads to is done (takeoff: hover; lift: formation; set_down:
+  hover; land: landed; resume keeps the phase: until it has run), at most
+  ``timeout`` seconds;
 * ``sticks: {forward, right, rotate}`` held for ``duration`` seconds (re-sent
   every tick, like a hand on a stick);
 * ``scale: 1.2`` or ``scale_steps: +2``; ``altitude: 1.8`` or ``altitude_steps: -1``;
@@ -57,7 +58,8 @@ class Sticks:
 class Step:
     """One step of a scenario (exactly one of the kinds)."""
 
-    action: str | None = field(doc="arm, takeoff, lift, set_down, land, abort", default=None)
+    action: str | None = field(doc="arm, takeoff, lift, set_down, land, abort, resume",
+                               default=None)
     sticks: Sticks | None = field(doc="stick positions held for `duration`", default=None)
     duration: float = field(doc="how long sticks are held, s", default=0.0, ge=0.0)
     scale: float | None = field(doc="shape scale", default=None, gt=0.0)
@@ -127,7 +129,10 @@ def play(scenario: Scenario, runtime: Runtime, clock: Clock, *,
                 runtime.request(action)
             except Exception as exc:
                 raise ScenarioError(f"{where}: {exc}") from None
-            _wait_phase(runtime, clock, DONE_IN[action], step.timeout, where)
+            if action in DONE_IN:
+                _wait_phase(runtime, clock, DONE_IN[action], step.timeout, where)
+            else:  # resume: the phase stays
+                _wait_action(runtime, clock, step.timeout, where)
         elif step.sticks is not None:
             end = now + step.duration
             t = now
@@ -181,6 +186,21 @@ def _wait_ready(runtime: Runtime, clock: Clock, timeout: float, where: str) -> N
             why = (f"vehicles {silent} not heard from" if silent else
                    warnings[-1] if warnings else "pre-flight checks did not pass")
             raise ScenarioError(f"{where}: not ready after {timeout:g} s: {why}")
+        clock.sleep_until(clock.now() + runtime.period)
+
+
+def _wait_action(runtime: Runtime, clock: Clock, timeout: float, where: str) -> None:
+    """Wait until the phase action started last has run (an error ends the scenario)."""
+    start = clock.now()
+    seen_errors = runtime.errors
+    while True:
+        if runtime.errors > seen_errors:
+            last = [e.text for e in runtime.events() if e.level == "error"]
+            raise ScenarioError(f"{where}: {last[-1] if last else 'the action failed'}")
+        if not runtime.action_running:
+            return
+        if clock.now() - start > timeout:
+            raise ScenarioError(f"{where}: still running after {timeout:g} s")
         clock.sleep_until(clock.now() + runtime.period)
 
 

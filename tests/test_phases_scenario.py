@@ -30,6 +30,15 @@ def test_refused_actions_say_why() -> None:
         next_phase(Phase.CONNECT, Action.TAKEOFF)
 
 
+def test_resume_keeps_the_phase_and_only_applies_while_streaming_in_flight() -> None:
+    for phase in Phase:
+        if phase in (Phase.HOVER, Phase.LIFTING, Phase.FORMATION, Phase.SETTING_DOWN):
+            assert next_phase(phase, Action.RESUME) is phase
+        else:
+            with pytest.raises(PhaseError, match=f"cannot resume while {phase.text}"):
+                next_phase(phase, Action.RESUME)
+
+
 def test_abort_is_possible_whenever_something_can_fly() -> None:
     for phase in Phase:
         if phase in (Phase.CONNECT, Phase.READY, Phase.LANDED):

@@ -121,3 +121,26 @@ def test_a_vehicle_leaving_offboard_freezes_then_its_landing_lands_the_team(
     assert app.runtime.phase in (Phase.ABORTING, Phase.LANDING, Phase.LANDED)
     assert any(e.text == "vehicle 2: coming down on its own (LAND): landing the team"
                for e in app.runtime.events())
+
+
+def test_resume_brings_a_held_vehicle_back_and_the_motion_with_it(flying: GcsApp) -> None:
+    """After a vehicle fell into HOLD (a gap in its setpoints, a pilot's switch), the
+    operator's resume switches it back to OFFBOARD and the frozen motion goes on."""
+    app = flying
+    hold_sticks(app, 1.0)
+    app.links.profiles[3].set_mode(SimMode.HOLD)
+    hold_sticks(app, 0.5)
+    assert app.runtime.snapshot.safety.freeze
+    assert app.runtime.snapshot.demand.forward == 0.0
+    play(Scenario(name="resume", steps=(Step(action="resume"),)), app.runtime, app.clock)
+    hold_sticks(app, 0.75)
+    snap = app.runtime.snapshot
+    assert snap.phase is Phase.FORMATION
+    assert snap.fleet.modes == ("OFFBOARD",) * 4
+    assert not snap.safety.freeze and snap.demand.forward > 0.0  # moving again
+    texts = [e.text for e in app.runtime.events()]
+    assert "resume: vehicle 3 back in OFFBOARD" in texts
+    # nothing to resume: said so, nothing sent
+    play(Scenario(name="again", steps=(Step(action="resume"),)), app.runtime, app.clock)
+    assert app.runtime.events()[-1].text == \
+        "resume: every flying vehicle is in its streaming mode already"

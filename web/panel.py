@@ -26,7 +26,7 @@ __all__ = ["FOLLOW_STEP", "HOTKEY_HELP", "PHASE_BUTTONS", "ControlPanel"]
 
 PHASE_BUTTONS: dict[str, Action] = {
     "arm": Action.ARM, "take off": Action.TAKEOFF, "lift": Action.LIFT,
-    "set down": Action.SET_DOWN, "land": Action.LAND,
+    "set down": Action.SET_DOWN, "land": Action.LAND, "resume": Action.RESUME,
 }
 _SCALE = ("shrink −", "grow +")
 _ALTITUDE = ("down ▼", "up ▲")
