@@ -156,8 +156,10 @@ class Runtime:
         """Error events so far (the event list keeps only the recent ones)."""
         self.gate = gate if gate is not None else StepGate(enabled=False)
         """Lets phase actions act only at ticks in lockstep (disabled otherwise)."""
-        # an action, one step per vehicle, and a landing the loop may start meanwhile
-        self._pool = ThreadPoolExecutor(max_workers=len(self.ids) + 2,
+        # An action and its step per vehicle, twice: the loop may start a landing while an
+        # action is stuck. Fewer and a vehicle's step would queue behind the others (in
+        # lockstep, holding every tick's window until the gate's cap).
+        self._pool = ThreadPoolExecutor(max_workers=2 * (len(self.ids) + 1),
                                         thread_name_prefix="gcs-action")
         self._action_busy = threading.Lock()
         self._abort_at: float | None = None
