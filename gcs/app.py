@@ -23,6 +23,7 @@ from gcs.analysis import Analysis, analyze
 from gcs.clock import Clock, ExternalClock, WallClock
 from gcs.config import GuidanceConfig, Team
 from gcs.link import keys
+from gcs.link.arrivals import Arrivals
 from gcs.link.clockwire import decode_clock, encode_time
 from gcs.link.dialect import MavMessage, mavlink
 from gcs.link.discovery import Presence, PresenceEvent
@@ -125,6 +126,7 @@ class GcsApp:
         self._subs: list[zenoh.Subscriber] = []
         self._closed = False
         self.truth: SimTruth | None = None
+        self._truth_arrivals = Arrivals()
         self.truth_errors = 0
         self.clock_errors = 0
         self.clock: Clock
@@ -184,10 +186,11 @@ class GcsApp:
             self.clock_errors += 1
             return
         t = clock.t
-        if self._ack is not None and clock.sent:
-            # Lockstep: the tick at t reads every payload sent before t, on every run (the
-            # clock can overtake telemetry: another priority, another callback thread).
+        if self._ack is not None and clock.truth is not None:
+            # Lockstep: the tick at t reads every payload and truth sample sent before t, on
+            # every run (the clock can overtake them: another priority, another thread).
             self.links.wait_received(clock.sent, ECHO_WAIT)
+            self._truth_arrivals.wait({"truth": clock.truth}, ECHO_WAIT)
         assert isinstance(self.clock, ExternalClock)
         if self._ack is not None and t <= self.clock.now() and self._last_ack is not None:
             # A repeated sample: the sim is waiting; our ack may have been lost.
@@ -212,6 +215,7 @@ class GcsApp:
             self.truth = SimTruth.from_bytes(bytes(sample.payload.to_bytes()))
         except ValueError:
             self.truth_errors += 1  # dropped; the next sample replaces it
+        self._truth_arrivals.arrived("truth")
 
     def add_listener(self,
                      callback: Callable[[RuntimeSnapshot, SimTruth | None], None]) -> None:

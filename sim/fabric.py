@@ -81,13 +81,15 @@ class HostFabric:
                  announce_sent: bool = False) -> None:
         """``on_frame(index, payload)`` runs on zenoh's threads for each vehicle's payload.
 
-        ``announce_sent`` (lockstep): every clock sample carries how many payloads
-        each vehicle has published (:func:`gcs.link.clockwire.encode_clock`).
+        ``announce_sent`` (lockstep): every clock sample carries how many truth
+        samples and how many payloads of each vehicle were published
+        (:func:`gcs.link.clockwire.encode_clock`), and truth is never dropped.
         """
         self._fleet = keys.check_fleet(fleet)
         self._sysids = tuple(sysids)
         self._announce_sent = announce_sent
         self._sent = [0] * len(self._sysids)
+        self._truth_sent = 0
         self._sent_lock = threading.Lock()  # receive threads send echoes, the loop telemetry
         self._settings = settings
         self._session = open_session(settings)
@@ -101,7 +103,9 @@ class HostFabric:
                 keys.clock(fleet), congestion_control=zenoh.CongestionControl.DROP,
                 priority=zenoh.Priority.REAL_TIME, express=True)
             self._truth = self._session.declare_publisher(
-                keys.sim(fleet, TRUTH_TOPIC), congestion_control=zenoh.CongestionControl.DROP,
+                keys.sim(fleet, TRUTH_TOPIC), congestion_control=(
+                    zenoh.CongestionControl.BLOCK if announce_sent
+                    else zenoh.CongestionControl.DROP),
                 priority=zenoh.Priority.DATA_LOW, express=True)
             self._subscribers.append(self._session.declare_subscriber(
                 keys.clock_ack(fleet), lambda s: self._on_ack(s, inbox)))
@@ -148,11 +152,12 @@ class HostFabric:
             return
         with self._sent_lock:
             sent = dict(zip(self._sysids, self._sent, strict=True))
-        self._clock.put(encode_clock(t, sent))
+        self._clock.put(encode_clock(t, self._truth_sent, sent))
 
     def publish_truth(self, truth: SimTruth) -> None:
         """Publish one ground-truth sample."""
         self._truth.put(truth.to_bytes())
+        self._truth_sent += 1  # the loop's thread only, as the clock
 
     def close(self) -> None:
         """Undeclare everything and close the session; idempotent."""

@@ -206,12 +206,12 @@ class SimHost:
             if self._status[k] is not VehicleStatus.KILLED:
                 endpoint.update(t)
                 self._drain()  # keep command acks prompt while telemetry goes out
-        self._fabric.publish_clock(t)
         if t >= self._next_truth - _EPS:
             self._next_truth += TRUTH_PERIOD_S  # keeps the 20 Hz phase between chunk times
             if self._next_truth <= t:
                 self._next_truth = t + TRUTH_PERIOD_S
             self._fabric.publish_truth(self._truth())
+        self._fabric.publish_clock(t)  # last: a lockstep sample counts what went before
 
     def _truth(self) -> SimTruth:
         w = self._world

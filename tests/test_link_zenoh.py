@@ -354,7 +354,7 @@ def test_fleet_receiver_waits_for_the_payloads_a_clock_sample_announces(fabric: 
         eventually(lambda: bool(got), "the route up", action=lambda: vehicle.send(b"x"))
         # 40 more, sent in a burst: the wait ends once the last one is handled, not before
         before = len(got)
-        sample = decode_clock(encode_clock(1.0, {5: before + 40, 6: 1000}))
+        sample = decode_clock(encode_clock(1.0, 0, {5: before + 40, 6: 1000}))
         for k in range(40):
             vehicle.send(bytes([k]))
         assert receiver.wait_received(sample.sent, 5.0) is True
@@ -374,11 +374,12 @@ def test_fleet_receiver_waits_for_the_payloads_a_clock_sample_announces(fabric: 
 
 
 def test_clock_samples_with_and_without_payload_counts() -> None:
-    assert decode_clock(encode_clock(2.5)) == ClockSample(2.5, {})
+    assert decode_clock(encode_clock(2.5)) == ClockSample(2.5)
     assert len(encode_clock(2.5)) == 8  # the plain 8-byte sample, as acks use
-    sample = decode_clock(encode_clock(0.25, {1: 7, 255: 2**32 + 3}))
-    assert sample == ClockSample(0.25, {1: 7, 255: 3})  # counts wrap at 2^32
-    with pytest.raises(ValueError, match="8 bytes plus 5 per vehicle, got 11"):
+    sample = decode_clock(encode_clock(0.25, 9, {1: 7, 255: 2**32 + 3}))
+    assert sample == ClockSample(0.25, 9, {1: 7, 255: 3})  # counts wrap at 2^32
+    assert decode_clock(encode_clock(0.5, 0)) == ClockSample(0.5, 0, {})  # no vehicle yet
+    with pytest.raises(ValueError, match="8 bytes, or 12 plus 5 per vehicle, got 11"):
         decode_clock(encode_clock(1.0) + b"abc")
     with pytest.raises(ValueError, match="finite time"):
-        decode_clock(encode_clock(float("nan"), {1: 1}))
+        decode_clock(encode_clock(float("nan"), 1, {1: 1}))

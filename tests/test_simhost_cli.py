@@ -98,12 +98,14 @@ def lockstep_as_a_gcs(proc: subprocess.Popen[str], ready: str, fleet: str,
     session = open_session(ZenohSettings(connect=(endpoint,)))
     clock: list[tuple[float, float]] = []
     announced: list[dict[int, int]] = []
+    truth_count: list[int | None] = []
     truth: list[SimTruth] = []
 
     def on_clock(s: zenoh.Sample) -> None:
         sample = decode_clock(s.payload.to_bytes())
         clock.append((time.monotonic(), sample.t))
         announced.append(dict(sample.sent))
+        truth_count.append(sample.truth)
 
     subs = [session.declare_subscriber(keys.clock(fleet), on_clock),
             session.declare_subscriber(keys.sim(fleet, "truth"), lambda s: truth.append(
@@ -117,8 +119,9 @@ def lockstep_as_a_gcs(proc: subprocess.Popen[str], ready: str, fleet: str,
         assert max(t for _, t in clock) == pytest.approx(CHUNK)
         waiting = [t for w, t in clock if w > clock[-1][0] - 0.5]
         assert len(waiting) >= 3 and set(waiting) == {CHUNK}
-        # each sample says how many payloads every vehicle has published so far
-        assert set(announced[-1]) == {1, 2, 3, 4}
+        # each sample says how many truth samples, and payloads of every vehicle, the host
+        # has published so far
+        assert set(announced[-1]) == {1, 2, 3, 4} and truth_count[-1] == len(truth) == 0
         before = announced[-1]
         ack = session.declare_publisher(keys.clock_ack(fleet))
         ack.put(b"junk")  # ignored (logged), not fatal
@@ -133,10 +136,10 @@ def lockstep_as_a_gcs(proc: subprocess.Popen[str], ready: str, fleet: str,
         gaps = [(b - a) / CHUNK for a, b in itertools.pairwise(steps)]
         bad = [g for g in gaps if not (g == pytest.approx(round(g)) and round(g) >= 1)]
         assert not bad, (bad, steps[:3], steps[-3:])
-        ticks = [s.t for s in truth if 0.25 < s.t <= 1.25]
-        # 20 Hz of sim time: never more; truth is latest-wins and drops behind the
-        # (blocking) MAVLink frames when the host runs flat out
-        assert 3 <= len(ticks) <= 20
+        # 20 Hz of sim time from the first chunk to 1.25 s, none dropped in lockstep, each
+        # counted by the clock sample that follows it
+        assert [round(s.t * 20) for s in truth] == list(range(len(truth)))
+        assert len(truth) == 26 and truth_count[-1] == 26  # t = 0 (first chunk) to 1.25 s
         ack.undeclare()
     finally:
         for sub in subs:

@@ -7,13 +7,14 @@ IEEE-754 float64 (``struct.pack("<d", t)``), published on
 ``fleet/<fleet>/clock`` by the sim and on ``fleet/<fleet>/clock/ack`` by the
 GCS (:func:`gcs.link.keys.clock`, :func:`gcs.link.keys.clock_ack`).
 
-A lockstep sim appends to its clock samples, per vehicle, 5 bytes: the system
-id (uint8) and how many MAVLink payloads that vehicle has published so far
-(uint32, little-endian, modulo 2^32). Why: the clock travels at real-time
-priority and on its own callback thread, so it can overtake the telemetry sent
-before it; with the counts, a GCS can wait until it holds every payload sent
-up to that time, and a headless flight sees the same telemetry at each tick
-on every run.
+A lockstep sim appends to its clock samples how many ground-truth samples it
+has published so far (uint32), then per vehicle 5 bytes: the system id
+(uint8) and how many MAVLink payloads that vehicle has published so far
+(uint32); all little-endian, counts modulo 2^32. Why: the clock travels at
+real-time priority and on its own callback thread, so it can overtake the
+telemetry and truth sent before it; with the counts, a GCS can wait until it
+holds everything sent up to that time, and a headless flight sees the same
+data at each tick on every run.
 """
 
 from __future__ import annotations
@@ -29,35 +30,43 @@ __all__ = ["CLOCK_FORMAT", "ClockSample", "decode_clock", "decode_time", "encode
 CLOCK_FORMAT = struct.Struct("<d")
 """8-byte little-endian float64 seconds."""
 
+_TRUTH = struct.Struct("<I")
+"""After the time, in a lockstep clock sample: ground-truth samples published."""
 _SENT = struct.Struct("<BI")
-"""Per vehicle after the time, in a lockstep clock sample: system id, payloads sent."""
+"""Then per vehicle: system id, MAVLink payloads published."""
 
 
 @dataclass(frozen=True)
 class ClockSample:
-    """A clock sample: sim time (s) and, from a lockstep sim, payloads sent per system id."""
+    """A clock sample: sim time (s) and, from a lockstep sim, what was published so far."""
 
     t: float
+    truth: int | None = None
+    """Ground-truth samples published (None: a plain sample)."""
     sent: Mapping[int, int] = field(default_factory=dict)
+    """MAVLink payloads published per vehicle system id."""
 
 
-def encode_clock(t: float, sent: Mapping[int, int] | None = None) -> bytes:
-    """Clock payload for sim time ``t`` (s) with each vehicle's payload count, if given."""
-    if not sent:
+def encode_clock(t: float, truth: int | None = None,
+                 sent: Mapping[int, int] | None = None) -> bytes:
+    """Clock payload for sim time ``t`` (s); with the counts (lockstep) if ``truth`` is given."""
+    if truth is None:
         return encode_time(t)
-    return encode_time(t) + b"".join(_SENT.pack(sysid, count & 0xFFFFFFFF)
-                                     for sysid, count in sent.items())
+    return (encode_time(t) + _TRUTH.pack(truth % 2**32)
+            + b"".join(_SENT.pack(sysid, count % 2**32) for sysid, count in (sent or {}).items()))
 
 
 def decode_clock(data: bytes) -> ClockSample:
     """:class:`ClockSample` from a clock payload; ValueError naming what is wrong."""
-    extra = len(data) - CLOCK_FORMAT.size
-    if extra < 0 or extra % _SENT.size:
-        raise ValueError(f"clock sample must be {CLOCK_FORMAT.size} bytes plus "
+    if len(data) == CLOCK_FORMAT.size:
+        return ClockSample(decode_time(data))
+    head = CLOCK_FORMAT.size + _TRUTH.size
+    if len(data) < head or (len(data) - head) % _SENT.size:
+        raise ValueError(f"clock sample must be {CLOCK_FORMAT.size} bytes, or {head} plus "
                          f"{_SENT.size} per vehicle, got {len(data)}")
     t = decode_time(data[:CLOCK_FORMAT.size])
-    sent = dict(_SENT.iter_unpack(data[CLOCK_FORMAT.size:]))
-    return ClockSample(t, sent)
+    (truth,) = _TRUTH.unpack_from(data, CLOCK_FORMAT.size)
+    return ClockSample(t, truth, dict(_SENT.iter_unpack(data[head:])))
 
 
 def encode_time(t: float) -> bytes:

@@ -22,6 +22,7 @@ from collections.abc import Callable, Mapping
 import zenoh
 
 from gcs.link import keys
+from gcs.link.arrivals import Arrivals
 
 __all__ = ["FleetReceiver", "ZenohTransport", "declare_alive", "watch_alive"]
 
@@ -40,10 +41,7 @@ class FleetReceiver:
     def __init__(self, session: zenoh.Session, *, fleet: str, direction: keys.Direction) -> None:
         self._direction = direction
         self._handlers: dict[int, Callable[[bytes], None]] = {}
-        self._received: dict[int, int] = {}  # payloads per system id, registered or not
-        self._missed: dict[int, int] = {}  # announced but never received (see wait_received)
-        self._cond = threading.Condition()
-        self._waiting = 0
+        self._arrivals = Arrivals()  # payloads per system id, registered or not
         self._subscriber: zenoh.Subscriber | None = session.declare_subscriber(
             keys.mavlink_all(fleet, direction), self._deliver)
 
@@ -72,37 +70,16 @@ class FleetReceiver:
         handler = self._handlers.get(sysid)
         if handler is not None:
             handler(sample.payload.to_bytes())
-        with self._cond:  # after the handler: a waiter goes on once the payload is in
-            self._received[sysid] = self._received.get(sysid, 0) + 1
-            if self._waiting:
-                self._cond.notify_all()
+        self._arrivals.arrived(sysid)  # after the handler: a waiter goes on once it is in
 
     def wait_received(self, sent: Mapping[int, int], timeout_s: float) -> bool:
         """Block until the registered vehicles' payloads counted in ``sent`` are all handled.
 
         ``sent``: payloads each system id has published so far (a lockstep sim's
-        clock sample, :func:`gcs.link.clockwire.decode_clock`). False after
-        ``timeout_s``; what was still missing then (published before this
-        subscriber existed, or lost) is written off, so it costs one wait only.
+        clock sample, :func:`gcs.link.clockwire.decode_clock`); see
+        :meth:`gcs.link.arrivals.Arrivals.wait`.
         """
-        def lag(sysid: int, announced: int) -> int:  # payloads still to come, modulo 2^32
-            have = self._received.get(sysid, 0) + self._missed.get(sysid, 0)
-            ahead = (announced - have) % 2**32
-            return ahead if ahead < 2**31 else 0  # "ahead" of the sample: nothing to wait for
-
-        def behind() -> dict[int, int]:
-            return {s: n for s, n in sent.items() if s in self._handlers and lag(s, n)}
-
-        with self._cond:
-            self._waiting += 1
-            try:
-                if self._cond.wait_for(lambda: not behind(), timeout_s):
-                    return True
-                for s, n in behind().items():
-                    self._missed[s] = self._missed.get(s, 0) + lag(s, n)
-                return False
-            finally:
-                self._waiting -= 1
+        return self._arrivals.wait(sent, timeout_s, only=lambda s: s in self._handlers)
 
 
 class ZenohTransport:
