@@ -1,4 +1,4 @@
-"""A gamepad on the GCS side: sticks, altitude, scale, guidance switch and abort.
+"""A gamepad on the GCS side: sticks, altitude, scale, guidance switch, abort and resume.
 
 The paper's operator flew the team with a gamepad; here it is read through
 pygame/SDL on the GCS machine and written to the same
@@ -77,6 +77,8 @@ class GamepadButtons:
     guidance_on: int = field(doc="switch the formation motion on", ge=0)
     guidance_off: int = field(doc="switch the formation motion off (the team holds)", ge=0)
     abort: int = field(doc="abort: freeze the motion, hold, then land", ge=0)
+    resume: int | None = field(doc="resume: switch the vehicles that left offboard back to it "
+                                   "(none: no button)", default=None, ge=0)
 
 
 @dataclass(frozen=True)
@@ -96,6 +98,7 @@ class GamepadConfig:
     def __post_init__(self) -> None:
         b = self.buttons
         numbers = [b.scale_up, b.scale_down, b.guidance_on, b.guidance_off, b.abort]
+        numbers += [b.resume] if b.resume is not None else []
         if len(set(numbers)) != len(numbers):
             raise ValueError(f"buttons: each action needs its own button, got {numbers}")
 
@@ -113,14 +116,17 @@ class GamepadMapper:
         operator: where the commands go.
         clock: the loop's clock.
         on_abort: called when the abort button is pressed.
+        on_resume: called when the resume button (if mapped) is pressed.
     """
 
     def __init__(self, config: GamepadConfig, operator: OperatorCommand, clock: Clock, *,
-                 on_abort: Callable[[], None]) -> None:
+                 on_abort: Callable[[], None],
+                 on_resume: Callable[[], None] = lambda: None) -> None:
         self.config = config
         self._operator = operator
         self._clock = clock
         self._on_abort = on_abort
+        self._on_resume = on_resume
         self._active = False
 
     def _centred(self, value: float) -> float:
@@ -144,6 +150,8 @@ class GamepadMapper:
         b = self.config.buttons
         if number == b.abort:
             self._on_abort()
+        elif number == b.resume:
+            self._on_resume()
         elif number == b.scale_up:
             self._operator.step_scale(1)
         elif number == b.scale_down:
@@ -171,11 +179,14 @@ class Gamepad:
         operator: where the commands go.
         clock: the loop's clock.
         on_abort: called when the abort button is pressed (on the pad's thread).
+        on_resume: called when the resume button (if mapped) is pressed (same thread).
     """
 
     def __init__(self, config: GamepadConfig, operator: OperatorCommand, clock: Clock, *,
-                 on_abort: Callable[[], None]) -> None:
-        self.mapper = GamepadMapper(config, operator, clock, on_abort=on_abort)
+                 on_abort: Callable[[], None],
+                 on_resume: Callable[[], None] = lambda: None) -> None:
+        self.mapper = GamepadMapper(config, operator, clock, on_abort=on_abort,
+                                    on_resume=on_resume)
         self._config = config
         self._stop = threading.Event()
         self._ready = threading.Event()

@@ -111,6 +111,24 @@ def test_buttons_scale_switch_guidance_and_abort() -> None:
     assert len(aborts) == 1
 
 
+def test_the_resume_button_is_optional_and_has_its_own_number() -> None:
+    op, clock = operator()
+    resumes: list[float] = []
+    pad = GamepadMapper(mapping(), op, clock, on_abort=lambda: None,
+                        on_resume=lambda: resumes.append(clock.now()))
+    pad.button(3)  # not mapped here
+    assert not resumes
+    buttons = {"scale_up": 5, "scale_down": 4, "guidance_on": 7, "guidance_off": 6,
+               "abort": 1, "resume": 3}
+    pad = GamepadMapper(mapping(buttons=buttons), op, clock, on_abort=lambda: None,
+                        on_resume=lambda: resumes.append(clock.now()))
+    pad.button(3)
+    assert len(resumes) == 1
+    assert load_gamepad_config(MAPPING).buttons.resume == 3
+    with pytest.raises(ValueError, match="each action needs its own button"):
+        mapping(buttons=buttons | {"resume": 1})
+
+
 # -- a virtual SDL joystick -----------------------------------------------------------
 
 

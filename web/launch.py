@@ -46,13 +46,16 @@ def _start_gamepad(app: GcsApp, mapping: Path | None) -> Gamepad | None:
         return None
     config = load_gamepad_config(path)
 
-    def abort() -> None:
-        try:
-            app.runtime.request(Action.ABORT)
-        except PhaseError as exc:
-            _say(f"gamepad: abort refused: {exc}")
+    def request(action: Action) -> Callable[[], None]:
+        def run() -> None:
+            try:
+                app.runtime.request(action)
+            except PhaseError as exc:
+                _say(f"gamepad: {action.text} refused: {exc}")
+        return run
 
-    pad = Gamepad(config, app.operator, app.clock, on_abort=abort)
+    pad = Gamepad(config, app.operator, app.clock, on_abort=request(Action.ABORT),
+                  on_resume=request(Action.RESUME))
     try:
         pad.start()
     except RuntimeError as exc:
