@@ -313,9 +313,9 @@ class Runtime:
         one lands the team (gcs.safety).
         """
         fleet = self.fleet_table.read(self.clock.now())
-        out = [vid for vid, mode, want, landing, armed in zip(
-            self.ids, fleet.modes, self._streaming_modes, self._landing_modes, fleet.armed,
-            strict=True) if mode != want and mode not in landing and armed]
+        out = [vid for vid, mode, want, down in zip(
+            self.ids, fleet.modes, self._streaming_modes, self._coming_down(fleet), strict=True)
+            if mode != want and not down]
         if not out:
             self._event("info", "resume: every flying vehicle is in its streaming mode already")
             return
@@ -324,6 +324,11 @@ class Runtime:
         for vid in out:
             self._event("info", f"resume: vehicle {vid} back in "
                                 f"{self.profiles[vid].streaming_mode}")
+
+    def _coming_down(self, fleet: FleetState) -> np.ndarray:
+        """(n,) True where a vehicle is disarmed or in one of its profile's landing modes."""
+        return ~fleet.armed | np.array([m in landing for m, landing in zip(
+            fleet.modes, self._landing_modes, strict=True)], dtype=bool)
 
     def _takeoff(self) -> None:
         cfg = self.team.config.flight
@@ -377,8 +382,7 @@ class Runtime:
             coming_down = None
             if phase in _ON_GCS_SETPOINTS and fleet.modes != self._streaming_modes:
                 modes = fleet.modes
-                coming_down = ~fleet.armed | np.array(
-                    [m in landing for m, landing in zip(modes, self._landing_modes, strict=True)])
+                coming_down = self._coming_down(fleet)
             verdict = evaluate(self.team.config.safety, self.ids, fleet.age, fleet.p_ned,
                                safe_radius=self.safe_radius_for(self._accel_last), modes=modes,
                                expected=self._streaming_modes if modes else (),

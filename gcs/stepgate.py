@@ -57,7 +57,8 @@ class StepGate:
         with self._cond:
             self._active += 1
         try:
-            yield from self._as_participant()
+            with self._marked():
+                yield
         finally:
             self._leave()
 
@@ -146,7 +147,9 @@ class StepGate:
     def _is_participant(self) -> bool:
         return getattr(self._local, "depth", 0) > 0
 
-    def _as_participant(self) -> Iterator[None]:
+    @contextmanager
+    def _marked(self) -> Iterator[None]:
+        """Mark the calling thread a participant (what :meth:`pause` checks)."""
         self._local.depth = getattr(self._local, "depth", 0) + 1
         try:
             yield
@@ -154,11 +157,10 @@ class StepGate:
             self._local.depth -= 1
 
     def _run(self, group: _Group | None, fn: Callable[..., T], *args: object) -> T:
-        self._local.depth = getattr(self._local, "depth", 0) + 1
         try:
-            return fn(*args)
+            with self._marked():
+                return fn(*args)
         finally:
-            self._local.depth -= 1
             if group is None:
                 self._leave()
             else:

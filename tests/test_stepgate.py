@@ -17,7 +17,7 @@ def test_disabled_gate_gates_nothing() -> None:
     assert gate.window() is True
     with ThreadPoolExecutor(2) as pool:
         assert gate.submit(pool, lambda: 7).result() == 7
-        assert gate.map(pool, lambda x: 1 / x, [1, 0])[1].__class__ is ZeroDivisionError
+        assert isinstance(gate.map(pool, lambda x: 1 / x, [1, 0])[1], ZeroDivisionError)
 
 
 def test_a_participant_acts_once_per_window_and_the_window_waits_for_it() -> None:
