@@ -6,7 +6,9 @@ while this script plays the vehicles: each publishes HEARTBEAT,
 LOCAL_POSITION_NED and ATTITUDE at 20 Hz on its zenoh key, so every tick reads
 fresh telemetry of every vehicle and sends every vehicle a setpoint. The
 runtime is put in formation flight directly (the phase machine is not what is
-measured). Prints one JSON object on its last line: per-tick compute time
+measured). The vehicles' process publishes at the sim host's CPU priority (in
+the background while on schedule, :mod:`sim.priority`), as the sim on the
+same machine would. Prints one JSON object on its last line: per-tick compute time
 (wall: p50, p99, max, ms; and the loop thread's CPU time, p50 and p99, ms,
 which leaves out time the thread spent preempted or waiting for the GIL), the
 same tick run 200 times back to back (``tick_warm_ms_p50``: the code's own cost
@@ -47,8 +49,11 @@ from gcs.link.encoder import MavlinkEncoder
 from gcs.link.zenoh_session import ZenohSettings, open_session
 from gcs.phases import Phase
 from gcs.simprocess import free_tcp_port
+from sim.host import LIFT_LAG_S
+from sim.priority import BackgroundStepping
 
 ROOT = Path(__file__).resolve().parents[1]
+_TELEMETRY_PERIOD_S = 0.05
 
 
 def ring_team(n: int, folder: Path) -> Path:
@@ -72,12 +77,19 @@ def ring_team(n: int, folder: Path) -> Path:
 
 
 def play_vehicles(session, fleet: str, positions: np.ndarray, stop: threading.Event) -> None:  # type: ignore[no-untyped-def]
-    """Publish each vehicle's telemetry at 20 Hz until ``stop``."""
+    """Publish each vehicle's telemetry at 20 Hz until ``stop``.
+
+    At the sim host's priority: in the background while on schedule
+    (:mod:`sim.priority`), as the vehicles' process on this machine would be.
+    """
     n = len(positions)
     pubs = [session.declare_publisher(keys.mavlink(fleet, i + 1, keys.Direction.FROM_VEHICLE))
             for i in range(n)]
     encs = [MavlinkEncoder(system_id=i + 1, component_id=1) for i in range(n)]
     t0 = time.monotonic()
+    due = [t0]
+    priority = BackgroundStepping(lambda: time.monotonic() - due[0] > LIFT_LAG_S)
+    priority.start()
     while not stop.is_set():
         ms = int((time.monotonic() - t0) * 1000)
         for i, (pub, enc) in enumerate(zip(pubs, encs, strict=True)):
@@ -86,7 +98,11 @@ def play_vehicles(session, fleet: str, positions: np.ndarray, stop: threading.Ev
             pub.put(enc.encode(enc.mav.heartbeat_encode(2, 0, 129, 4, 4))
                     + enc.encode(enc.mav.local_position_ned_encode(ms, x, y, -1.5, 0.1, 0.0, 0.0))
                     + enc.encode(enc.mav.attitude_encode(ms, 0.01, 0.02, 0.0, 0.0, 0.0, 0.0)))
-        stop.wait(0.05)
+        due[0] += _TELEMETRY_PERIOD_S
+        if due[0] > time.monotonic():
+            priority.keeping_up()
+        stop.wait(max(0.0, due[0] - time.monotonic()))
+    priority.close()
 
 
 def measure(n: int, seconds: float, folder: Path) -> dict[str, float]:

@@ -8,7 +8,8 @@ trip crosses two processes and zenoh twice and includes MAVLink encoding and
 decoding on both sides, the host's checks and its autopilot call; the host
 keeps running its physics at real-time speed (4 vehicles, full telemetry)
 meanwhile. The setpoints go to a disarmed vehicle, which accepts and echoes
-them without flying.
+them without flying. This process gives receive threads the GIL within
+0.1 ms, as the GCS process does (``gcs.app.LOOP_GIL_SWITCH_S``).
 
 For scale on a shared machine it measures the floor at the same moments:
 each setpoint round trip is followed by a bare zenoh round trip between this
@@ -39,6 +40,7 @@ from pathlib import Path
 import numpy as np
 import zenoh
 
+from gcs.app import LOOP_GIL_SWITCH_S
 from gcs.link import Link, MavMessage, ZenohSettings, ZenohTransport, open_session
 
 __all__ = ["main"]
@@ -152,6 +154,8 @@ def main() -> int:
     parser.add_argument("--config", default=str(_ROOT / "configs" / "bebop_square.yaml"),
                         help="team file for the sim host")
     args = parser.parse_args()
+    # as in the GCS process (GcsApp.start): receive threads get the GIL within 0.1 ms
+    sys.setswitchinterval(LOOP_GIL_SWITCH_S)
     sim_endpoint = f"tcp/127.0.0.1:{_free_port()}"
     echo_endpoint = f"tcp/127.0.0.1:{_free_port()}"
     sim, ready = _start([sys.executable, "-m", "sim", "--config", args.config, "--listen",

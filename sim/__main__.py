@@ -79,6 +79,10 @@ def _parser() -> argparse.ArgumentParser:
                    help="stop after S seconds of sim time (default: run until stopped)")
     p.add_argument("--fleet", default=None,
                    help="fleet name in the zenoh keys (default: the team file's gcs.fleet)")
+    p.add_argument("--foreground", action="store_true",
+                   help="step at normal CPU priority (default: paced runs step in the "
+                        "background while they keep up, so a GCS on the same machine goes "
+                        "first; needs root or CAP_SYS_NICE, else always normal)")
     return p
 
 
@@ -91,7 +95,8 @@ def _options(args: argparse.Namespace) -> HostOptions:
                        listen=tuple(args.listen) or (DEFAULT_ENDPOINT,),
                        connect=tuple(args.connect), udp=args.udp,
                        udp_base_port=args.udp_base_port, udp_gcs_port=args.udp_gcs_port or None,
-                       seed=args.seed, duration=args.duration, fleet=args.fleet)
+                       seed=args.seed, duration=args.duration, fleet=args.fleet,
+                       background=not args.foreground)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

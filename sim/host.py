@@ -44,6 +44,7 @@ from sim.fabric import HostFabric
 from sim.inbox import ClockAck, ControlMessage, Event, Inbox, Received, Stop
 from sim.options import HostOptions
 from sim.pacing import Pacer
+from sim.priority import BackgroundStepping
 from sim.scenario import build_team
 from sim.team_layout import team_layout
 from sim.udp import UdpPorts
@@ -62,6 +63,9 @@ TRUTH_PERIOD_S = 1.0 / 20.0
 
 CLOCK_REPUBLISH_S = 0.1
 """While a lockstep host waits for an ack, it repeats its clock this often (wall s)."""
+
+LIFT_LAG_S = 0.02
+"""A paced host this far behind wall time steps at normal CPU priority until it caught up, s."""
 
 _EPS = 1e-9
 
@@ -97,6 +101,7 @@ class SimHost:
         self._inbox = Inbox()
         self._status = [VehicleStatus.LIVE] * len(self._sysids)
         self._pacer = Pacer(options.speed)
+        self._due: float | None = None  # wall time the chunk being stepped was due (paced)
         # lockstep: nothing past the first chunk runs before a GCS acks its first tick, so
         # what the GCS sees does not depend on when it connected
         self._acked = -math.inf
@@ -161,13 +166,28 @@ class SimHost:
 
     def run(self) -> None:
         """Step until :meth:`stop`, or the first chunk boundary at or after the duration; blocks."""
+        # A lockstep host is what the GCS waits for at every tick: never in the background.
+        priority = BackgroundStepping(self._behind) \
+            if self._options.background and not self._options.lockstep else None
+        if priority is not None:
+            priority.start()
+        try:
+            self._step_until_stopped(priority)
+        finally:
+            if priority is not None:
+                priority.close()
+                if priority.lifts:
+                    _log.info("fell behind wall time %d times (stepped at normal priority "
+                              "until caught up)", priority.lifts)
+
+    def _step_until_stopped(self, priority: BackgroundStepping | None) -> None:
         duration = self._options.duration
         self._fabric.publish_clock(self.t)
         while not self._stopping:
             if duration is not None and self.t >= duration - _EPS:
                 break
             target = self.t + CHUNK_S
-            self._wait_until_due(target)
+            self._wait_until_due(target, priority)
             if self._stopping:
                 break
             self._drain()
@@ -187,7 +207,13 @@ class SimHost:
         if self._udp is not None:
             self._udp.close()
 
-    def _wait_until_due(self, target: float) -> None:
+    def _behind(self) -> bool:
+        """Whether the chunk being stepped is overdue by more than :data:`LIFT_LAG_S` (any
+        thread)."""
+        due = self._due
+        return due is not None and time.monotonic() - due > LIFT_LAG_S
+
+    def _wait_until_due(self, target: float, priority: BackgroundStepping | None) -> None:
         """Handle events until ``target`` may be simulated (pacing and lockstep allow it)."""
         while not self._stopping:
             if self._options.lockstep and target > self._acked + self._period + _EPS:
@@ -195,9 +221,12 @@ class SimHost:
                     self._fabric.publish_clock(self.t)  # for a GCS that joined late
                 continue
             deadline = self._pacer.deadline(target)
+            self._due = deadline
             wait = 0.0 if deadline is None else deadline - time.monotonic()
             if wait <= 0.0:
                 return
+            if priority is not None:
+                priority.keeping_up()
             self._handle(self._inbox.get(wait))
 
     def _after_chunk(self) -> None:

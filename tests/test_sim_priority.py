@@ -1,0 +1,123 @@
+"""The sim steps in the background while it keeps up, and at normal priority while it lags."""
+
+from __future__ import annotations
+
+import os
+import threading
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+import pytest
+
+import sim.priority
+from gcs.config import load_team
+from gcs.simprocess import free_tcp_port
+from sim.config import load_world_config
+from sim.host import SimHost
+from sim.options import HostOptions
+from sim.priority import BackgroundStepping, can_lift
+from sim.scenario import DEFAULT_AUTOPILOT_CONFIG, DEFAULT_WORLD_CONFIG
+from vehicles.config import load_autopilot_config
+
+CONFIG = Path(__file__).resolve().parents[1] / "configs" / "bebop_square.yaml"
+
+pytestmark = pytest.mark.skipif(not hasattr(os, "SCHED_IDLE") or not can_lift(),
+                                reason="needs Linux and the right to raise a thread's priority")
+
+
+def _policy(tid: int) -> int:
+    return os.sched_getscheduler(tid)
+
+
+def _until(condition: Callable[[], bool], timeout_s: float = 2.0) -> bool:
+    deadline = time.monotonic() + timeout_s
+    while not condition():
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.005)
+    return True
+
+
+@contextmanager
+def _on_a_thread(body: Callable[[threading.Event], None]) -> Iterator[list[int]]:
+    """Run ``body(done)`` on a thread; yields a list that holds the thread's id once known."""
+    tid: list[int] = []
+    done = threading.Event()
+
+    def run() -> None:
+        tid.append(threading.get_native_id())
+        body(done)
+
+    thread = threading.Thread(target=run, daemon=True)
+    thread.start()
+    assert _until(lambda: bool(tid))
+    try:
+        yield tid
+    finally:
+        done.set()
+        thread.join(timeout=5.0)
+
+
+def test_the_stepping_thread_is_lifted_while_behind_and_returns_when_ahead() -> None:
+    behind = threading.Event()
+    stepping = BackgroundStepping(behind.is_set, watch_period_s=0.005)
+    ahead = threading.Event()
+    after_close: list[int] = []
+
+    def body(done: threading.Event) -> None:
+        assert stepping.start()
+        while not done.is_set():
+            if ahead.is_set():
+                stepping.keeping_up()
+            time.sleep(0.002)
+        stepping.close()
+        after_close.append(_policy(0))
+
+    with _on_a_thread(body) as tid:
+        assert _until(lambda: _policy(tid[0]) == os.SCHED_IDLE)
+        assert stepping.background and stepping.lifts == 0
+        behind.set()  # starved: the watchdog lifts it
+        assert _until(lambda: _policy(tid[0]) == os.SCHED_OTHER)
+        assert stepping.lifts == 1 and not stepping.background
+        behind.clear()
+        ahead.set()  # caught up: back to the background
+        assert _until(lambda: _policy(tid[0]) == os.SCHED_IDLE)
+        assert stepping.lifts == 1
+    assert after_close == [os.SCHED_OTHER]
+
+
+def test_a_thread_that_could_not_come_back_is_never_put_in_the_background(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(sim.priority, "can_lift", lambda: False)
+    started: list[bool] = []
+    with _on_a_thread(lambda done: (started.append(
+            BackgroundStepping(lambda: False).start()), done.wait(5.0))) as tid:
+        assert _until(lambda: bool(started))
+        assert started == [False]
+        assert _policy(tid[0]) == os.SCHED_OTHER
+
+
+def _host(**options: object) -> SimHost:
+    return SimHost(load_team(CONFIG),
+                   HostOptions(listen=(f"tcp/127.0.0.1:{free_tcp_port()}",),
+                               **options),  # type: ignore[arg-type]
+                   world_config=load_world_config(DEFAULT_WORLD_CONFIG),
+                   autopilot_config=load_autopilot_config(DEFAULT_AUTOPILOT_CONFIG))
+
+
+@pytest.mark.parametrize(("options", "expected"), [
+    ({"speed": 1.0}, "SCHED_IDLE"),
+    ({"speed": 1.0, "background": False}, "SCHED_OTHER"),
+    ({"speed": None, "lockstep": True}, "SCHED_OTHER"),  # the GCS waits for it every tick
+], ids=["paced", "foreground", "lockstep"])
+def test_which_hosts_step_in_the_background(options: dict[str, object], expected: str) -> None:
+    host = _host(**options)
+    try:
+        with _on_a_thread(lambda done: host.run()) as tid:
+            time.sleep(0.3)  # a few dozen chunks (or acks awaited, in lockstep)
+            assert _policy(tid[0]) == getattr(os, expected)
+            host.stop()
+    finally:
+        host.close()
