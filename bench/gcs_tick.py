@@ -6,9 +6,9 @@ while this script plays the vehicles: each publishes HEARTBEAT,
 LOCAL_POSITION_NED and ATTITUDE at 20 Hz on its zenoh key, so every tick reads
 fresh telemetry of every vehicle and sends every vehicle a setpoint. The
 runtime is put in formation flight directly (the phase machine is not what is
-measured). The vehicles' process publishes at the sim host's CPU priority (in
-the background while on schedule, :mod:`sim.priority`), as the sim on the
-same machine would. Prints one JSON object on its last line: per-tick compute time
+measured). With ``--vehicles-in-background`` the vehicles' process publishes
+as a sim host started with ``--background`` steps (in the background while on
+schedule, :mod:`sim.priority`). Prints one JSON object on its last line: per-tick compute time
 (wall: p50, p99, max, ms; and the loop thread's CPU time, p50 and p99, ms,
 which leaves out time the thread spent preempted or waiting for the GIL), the
 same tick run 200 times back to back (``tick_warm_ms_p50``: the code's own cost
@@ -54,6 +54,7 @@ from sim.priority import BackgroundStepping
 
 ROOT = Path(__file__).resolve().parents[1]
 _TELEMETRY_PERIOD_S = 0.05
+_BACKGROUND = "--vehicles-in-background"
 
 
 def ring_team(n: int, folder: Path) -> Path:
@@ -76,12 +77,10 @@ def ring_team(n: int, folder: Path) -> Path:
     return path
 
 
-def play_vehicles(session, fleet: str, positions: np.ndarray, stop: threading.Event) -> None:  # type: ignore[no-untyped-def]
-    """Publish each vehicle's telemetry at 20 Hz until ``stop``.
-
-    At the sim host's priority: in the background while on schedule
-    (:mod:`sim.priority`), as the vehicles' process on this machine would be.
-    """
+def play_vehicles(session, fleet: str, positions: np.ndarray, stop: threading.Event,  # type: ignore[no-untyped-def]
+                  *, background: bool = False) -> None:
+    """Publish each vehicle's telemetry at 20 Hz until ``stop`` (``background``: as a sim
+    host with ``--background`` steps)."""
     n = len(positions)
     pubs = [session.declare_publisher(keys.mavlink(fleet, i + 1, keys.Direction.FROM_VEHICLE))
             for i in range(n)]
@@ -89,7 +88,8 @@ def play_vehicles(session, fleet: str, positions: np.ndarray, stop: threading.Ev
     t0 = time.monotonic()
     due = [t0]
     priority = BackgroundStepping(lambda: time.monotonic() - due[0] > LIFT_LAG_S)
-    priority.start()
+    if background:
+        priority.start()
     while not stop.is_set():
         ms = int((time.monotonic() - t0) * 1000)
         for i, (pub, enc) in enumerate(zip(pubs, encs, strict=True)):
@@ -105,12 +105,14 @@ def play_vehicles(session, fleet: str, positions: np.ndarray, stop: threading.Ev
     priority.close()
 
 
-def measure(n: int, seconds: float, folder: Path) -> dict[str, float]:
+def measure(n: int, seconds: float, folder: Path, *,
+            background: bool = False) -> dict[str, float]:
     path = ring_team(n, folder)
     team = load_team(path)
     endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
     # the vehicles play in another process, as they would on the network
-    player = subprocess.Popen([sys.executable, __file__, "--play", str(path), endpoint])
+    player = subprocess.Popen([sys.executable, __file__, "--play", str(path), endpoint,
+                               *([_BACKGROUND] if background else [])])
     try:
         with GcsApp(team, zenoh_settings=ZenohSettings(mode="peer", connect=(endpoint,))) as app:
             deadline = time.monotonic() + 10
@@ -147,13 +149,14 @@ def measure(n: int, seconds: float, folder: Path) -> dict[str, float]:
             "sleep_floor_loaded_ms_p99": loaded_floor}
 
 
-def play(path: str, endpoint: str) -> None:
+def play(path: str, endpoint: str, background: bool) -> None:
     """The vehicles' process: listen on ``endpoint`` and publish telemetry until killed."""
     team = load_team(path)
     session = open_session(ZenohSettings(mode="peer", listen=(endpoint,), connect=()))
     rng = np.random.default_rng(0)
     positions = team.formation.positions + rng.normal(0, 0.05, team.formation.positions.shape)
-    play_vehicles(session, team.config.gcs.fleet, positions, threading.Event())
+    play_vehicles(session, team.config.gcs.fleet, positions, threading.Event(),
+                  background=background)
 
 
 def sleep_floor(seconds: float = 2.0, period: float = 0.02) -> float:
@@ -168,19 +171,22 @@ def sleep_floor(seconds: float = 2.0, period: float = 0.02) -> float:
 
 
 def main() -> None:
-    if len(sys.argv) == 4 and sys.argv[1] == "--play":
-        play(sys.argv[2], sys.argv[3])
+    if len(sys.argv) in (4, 5) and sys.argv[1] == "--play":
+        play(sys.argv[2], sys.argv[3], background=sys.argv[4:] == [_BACKGROUND])
         return
     if len(sys.argv) == 3 and sys.argv[1] == "--floor":
         print(json.dumps(sleep_floor(float(sys.argv[2]))))
         return
-    seconds = float(sys.argv[1]) if len(sys.argv) > 1 else 30.0
-    out: dict[str, object] = {"sleep_floor_ms_p99": sleep_floor()}
+    background = _BACKGROUND in sys.argv[1:]
+    numbers = [a for a in sys.argv[1:] if a != _BACKGROUND]
+    seconds = float(numbers[0]) if numbers else 30.0
+    out: dict[str, object] = {"sleep_floor_ms_p99": sleep_floor(),
+                              "vehicles_in_background": background}
     print(f"bare sleep loop wakes late by up to {out['sleep_floor_ms_p99']} ms (p99)",
           file=sys.stderr)
     with tempfile.TemporaryDirectory() as tmp:
         for n in (4, 100):
-            out[f"vehicles_{n}"] = measure(n, seconds, Path(tmp))
+            out[f"vehicles_{n}"] = measure(n, seconds, Path(tmp), background=background)
             print(f"{n} vehicles: {out[f'vehicles_{n}']}", file=sys.stderr)
     print(json.dumps(out))
 

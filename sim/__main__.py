@@ -79,10 +79,10 @@ def _parser() -> argparse.ArgumentParser:
                    help="stop after S seconds of sim time (default: run until stopped)")
     p.add_argument("--fleet", default=None,
                    help="fleet name in the zenoh keys (default: the team file's gcs.fleet)")
-    p.add_argument("--foreground", action="store_true",
-                   help="step at normal CPU priority (default: paced runs step in the "
-                        "background while they keep up, so a GCS on the same machine goes "
-                        "first; needs root or CAP_SYS_NICE, else always normal)")
+    p.add_argument("--background", action="store_true",
+                   help="paced runs: step at background CPU priority while keeping up, so a "
+                        "GCS on the same machine always goes first (Linux; needs root or "
+                        "CAP_SYS_NICE, else ignored; a saturated machine slows the sim)")
     return p
 
 
@@ -96,7 +96,7 @@ def _options(args: argparse.Namespace) -> HostOptions:
                        connect=tuple(args.connect), udp=args.udp,
                        udp_base_port=args.udp_base_port, udp_gcs_port=args.udp_gcs_port or None,
                        seed=args.seed, duration=args.duration, fleet=args.fleet,
-                       background=not args.foreground)
+                       background=args.background)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -64,7 +64,7 @@ TRUTH_PERIOD_S = 1.0 / 20.0
 CLOCK_REPUBLISH_S = 0.1
 """While a lockstep host waits for an ack, it repeats its clock this often (wall s)."""
 
-LIFT_LAG_S = 0.02
+LIFT_LAG_S = 0.05
 """A paced host this far behind wall time steps at normal CPU priority until it caught up, s."""
 
 _EPS = 1e-9
@@ -151,6 +151,8 @@ class SimHost:
         parts.append("speed max" if speed is None else f"speed {speed:g}x")
         if self._options.lockstep:
             parts.append(f"lockstep {self._period:g} s")
+        elif self._options.background:
+            parts.append("background")
         if self._udp is not None:
             ports = " ".join(f"{s}=127.0.0.1:{p}" for s, p in zip(self._sysids, self._udp.ports,
                                                                    strict=True))

@@ -40,7 +40,7 @@ class HostOptions:
     """Stop after this much sim time, s; None: run until stopped."""
     fleet: str | None = None
     """Fleet name in the zenoh keys; None: the team file's ``gcs.fleet``."""
-    background: bool = True
+    background: bool = False
     """Paced runs: step at background CPU priority while keeping up (:mod:`sim.priority`)."""
 
     def __post_init__(self) -> None:

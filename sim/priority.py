@@ -1,19 +1,25 @@
-"""The sim's stepping thread runs in the background while it keeps up with wall time.
+"""A sim's stepping thread in the background while it keeps up with wall time (opt-in).
 
-Why: the sim usually shares its machine with the GCS (``gcs demo``, ``gcs
-fly``, a bench). Every few milliseconds it steps physics and encodes
-telemetry for a millisecond or so; at normal priority the kernel lets that
-burst finish its time slice before a woken GCS loop or MAVLink receive thread
-gets the core, which on a two-core machine tripled the p99 of a zenoh round
-trip (0.5 ms to 1.5 ms). At Linux's ``SCHED_IDLE`` any normal thread that
-wakes takes the core at once.
+Why: the sim often shares its machine with the GCS (``gcs demo``, a bench).
+Every few milliseconds it steps physics and encodes telemetry for a fraction
+of a millisecond; at normal priority a GCS loop or MAVLink receive thread that
+wakes meanwhile may wait for that burst, which on a two-core machine tripled
+the p99 of a zenoh round trip between two other processes (0.4 ms to 1.3 ms).
+At Linux's ``SCHED_IDLE`` the kernel counts the sim's core as idle: a waking
+normal thread is placed there and preempts it at once (a shorter time slice
+or nice 19 did not help; renice was tried).
 
-The price of ``SCHED_IDLE`` is that a saturated machine gives the thread
-almost nothing, and a starved sim would freeze the team's telemetry. So a
-watchdog thread at normal priority checks a few times per chunk whether the
-stepping thread has fallen behind its wall-time schedule and then lifts it to
-normal priority; the stepping thread goes back to the background once it is
-ahead again (:meth:`BackgroundStepping.keeping_up`).
+The price is that a saturated machine gives the thread almost nothing, and a
+starved sim would freeze the team's telemetry. So a watchdog thread at normal
+priority checks often whether the stepping thread has fallen behind its
+wall-time schedule and lifts it to normal priority; the stepping thread goes
+back to the background once it is ahead again and a second has passed
+(:meth:`BackgroundStepping.keeping_up`), since on a machine that stays
+saturated going back at once would starve it again at every chunk. The
+watchdog is Python too and needs the GIL, which the starved loop may hold, so
+with every core saturated a paced host keeps 55-70 % of real time (2-4 %
+without the watchdog, 100 % at normal priority): the reason this is an
+option (``python -m sim --background``) and not the default.
 
 Lifting needs the right to raise a thread's priority (root, CAP_SYS_NICE, or
 an RLIMIT_NICE of 20); without it the thread could not come back, so it stays
@@ -22,14 +28,20 @@ at normal priority, as it does where the policy does not exist (not Linux).
 
 from __future__ import annotations
 
+import math
 import os
 import threading
+import time
 from collections.abc import Callable
 
-__all__ = ["WATCH_PERIOD_S", "BackgroundStepping", "can_lift", "set_background"]
+__all__ = ["STAY_LIFTED_S", "WATCH_PERIOD_S", "BackgroundStepping", "can_lift",
+           "set_background"]
 
 WATCH_PERIOD_S = 0.01
 """How often the watchdog looks whether the stepping thread fell behind, s."""
+
+STAY_LIFTED_S = 1.0
+"""A lifted stepping thread stays at normal priority at least this long, s."""
 
 _IDLE = getattr(os, "SCHED_IDLE", None)
 _OTHER = getattr(os, "SCHED_OTHER", None)
@@ -73,9 +85,12 @@ class BackgroundStepping:
     """
 
     def __init__(self, behind: Callable[[], bool], *,
-                 watch_period_s: float = WATCH_PERIOD_S) -> None:
+                 watch_period_s: float = WATCH_PERIOD_S,
+                 stay_lifted_s: float = STAY_LIFTED_S) -> None:
         self._behind = behind
         self._period = watch_period_s
+        self._stay_lifted = stay_lifted_s
+        self._lifted_at = -math.inf
         self._lock = threading.Lock()
         self._tid: int | None = None
         self._background = False
@@ -102,8 +117,10 @@ class BackgroundStepping:
         return self._background
 
     def keeping_up(self) -> None:
-        """From the stepping thread, when it is ahead of schedule: back to the background."""
-        if self._tid is None or self._background:
+        """From the stepping thread, when it is ahead of schedule: back to the background
+        (once :data:`STAY_LIFTED_S` passed since it was lifted)."""
+        if self._tid is None or self._background \
+                or time.monotonic() - self._lifted_at < self._stay_lifted:
             return
         with self._lock:
             if not self._stop.is_set() and set_background(True):
@@ -128,4 +145,5 @@ class BackgroundStepping:
                     assert self._tid is not None
                     if set_background(False, self._tid):
                         self._background = False
+                        self._lifted_at = time.monotonic()
                         self.lifts += 1
