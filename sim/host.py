@@ -171,8 +171,9 @@ class SimHost:
         # A lockstep host is what the GCS waits for at every tick: never in the background.
         priority = BackgroundStepping(self._behind) \
             if self._options.background and not self._options.lockstep else None
-        if priority is not None:
-            priority.start()
+        if priority is not None and not priority.start():
+            _log.warning("--background: this process may not raise a thread's priority again "
+                         "(root or CAP_SYS_NICE needed), so the loop steps at normal priority")
         try:
             self._step_until_stopped(priority)
         finally:

@@ -164,3 +164,21 @@ def test_the_command_line_asks_for_the_background_and_the_ready_line_says_so() -
         assert host.ready_line().endswith(", speed 1x, background")
     finally:
         host.close()
+
+
+def test_a_host_that_may_not_lift_its_loop_says_so_and_steps_normally(
+        monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture) -> None:
+    monkeypatch.setattr(sim.priority, "can_lift", lambda: False)
+    host = _host(speed=1.0, background=True)
+    seen: set[int] = set()
+    try:
+        with caplog.at_level("WARNING", logger="sim.host"), \
+                _on_a_thread(lambda done: host.run()) as tid:
+            for _ in range(20):
+                seen.add(_policy(tid[0]))
+                time.sleep(0.01)
+            host.stop()
+    finally:
+        host.close()
+    assert seen == {os.SCHED_OTHER}
+    assert "steps at normal priority" in caplog.text
