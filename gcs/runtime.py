@@ -42,6 +42,7 @@ from gcs.config import Team
 from gcs.fleet import FleetState, FleetTable
 from gcs.guidance import Guidance, MotionDemand
 from gcs.link.errors import LinkError
+from gcs.link.fanout import Fanout
 from gcs.link.profile import AutopilotProfile
 from gcs.link.setpoints import SETPOINT_MESSAGE, packed_setpoints
 from gcs.operator import OperatorCommand, OperatorSnapshot
@@ -127,6 +128,7 @@ class Runtime:
         self._targets = np.array([(link.sysid, link.target_component) for link in links])
         self._boot_times = np.array([link.boot_time for link in links])
         self._kinds = np.array([p.setpoint_kind.type_mask for p in self._profile_list])
+        self._fanout = Fanout(links)
         self.fleet_table = FleetTable(self.ids, profiles)
         """The team's latest telemetry, kept current by the links (the UI reads it too)."""
         self.clock = clock
@@ -480,21 +482,19 @@ class Runtime:
                 refused.add(i)
                 self._not_sent(i, exc)
         time_ms = ((time.monotonic() - self._boot_times) * 1000.0).astype(np.int64) & 0xFFFFFFFF
-        frames = packed_setpoints(target_system=self._targets[:, 0],
+        packed = packed_setpoints(target_system=self._targets[:, 0],
                                   target_component=self._targets[:, 1], time_boot_ms=time_ms,
                                   accel_xy_ned=accel, vertical=np.nan_to_num(vertical),
                                   kind=self._kinds)
-        crc_extra = SETPOINT_MESSAGE.crc_extra
-        for i, (profile, frame, value) in enumerate(zip(profiles, frames, vertical.tolist(),
-                                                        strict=True)):
-            if not math.isfinite(value):
+        finite = np.isfinite(vertical)
+        only = None
+        if not finite.all():
+            only = np.flatnonzero(finite).tolist()
+            for i in np.flatnonzero(~finite).tolist():
                 if i not in refused:  # a refusal is reported above
-                    self._not_sent(i, f"vertical setpoint not finite: {value}")
-                continue
-            try:
-                profile.link.send_packed(frame, crc_extra)
-            except Exception as exc:
-                self._not_sent(i, exc)
+                    self._not_sent(i, f"vertical setpoint not finite: {vertical[i]}")
+        for i, exc in self._fanout.send(packed, SETPOINT_MESSAGE.crc_extra, only).items():
+            self._not_sent(i, exc)
 
     def _not_sent(self, i: int, why: Exception | str) -> None:
         """Warn once that vehicle ``i``'s setpoint was not sent, and why."""

@@ -20,7 +20,7 @@ from gcs.link import (
     accel_setpoint_message,
     read_setpoint,
 )
-from gcs.link.encoder import frame_dtype
+from gcs.link.encoder import EncoderBatch, frame_dtype, packed_rows
 from gcs.link.setpoints import packed_setpoints
 from gcs.link.signing import SigningKey
 
@@ -216,32 +216,57 @@ def test_fast_framing_gives_the_bytes_pymavlink_gives(signed: bool) -> None:
     assert (decoded.x, decoded.y, decoded.z, decoded.vz) == (1.0, 2.0, -3.0, 0.0)
 
 
-@pytest.mark.parametrize("signed", [False, True])
-def test_a_fleets_packed_setpoints_are_the_frames_encoded_one_by_one(signed: bool) -> None:
-    """packed_setpoints + restamp (the loop's path) == accel_setpoint_fields + encode_fields."""
-    key = SigningKey(bytes(range(3, 35))) if signed else None
-    packed_side, single_side = ([MavlinkEncoder(system_id=245, component_id=190, signing_key=key,
-                                                wall_clock=lambda: 1.7e9) for _ in range(5)]
-                                for _ in range(2))
+@pytest.mark.parametrize("signed", ["none", "all", "some"])
+def test_a_fleets_packed_setpoints_are_the_frames_encoded_one_by_one(signed: str) -> None:
+    """packed_setpoints + EncoderBatch.stamp (the loop's path), and + restamp row by row,
+    == accel_setpoint_fields + encode_fields, sequence numbers and signatures included."""
+    key = SigningKey(bytes(range(3, 35)))
+    keys = {"none": [None] * 5, "all": [key] * 5, "some": [None, key, None, None, key]}[signed]
+
+    def encoders() -> list[MavlinkEncoder]:
+        return [MavlinkEncoder(system_id=245, component_id=190, signing_key=k,
+                               wall_clock=lambda: 1.7e9) for k in keys]
+
+    batch_side, row_side, single_side = encoders(), encoders(), encoders()
+    batch = EncoderBatch(batch_side)
     rng = np.random.default_rng(4)
-    for tick in range(60):  # wraps every sequence number
+    for tick in range(300):  # wraps every sequence number
         accel = rng.normal(0, 1, (5, 2))
         kind = np.array([MASK_ACCEL_XY_POS_Z, MASK_ACCEL, MASK_ACCEL_XY_POS_Z, MASK_ACCEL,
                          MASK_ACCEL_XY_POS_Z])
         vertical = rng.normal(-1, 0.5, 5)
         times = np.arange(5) * 1000 + tick * 250
-        frames = packed_setpoints(target_system=np.arange(1, 6), target_component=np.ones(5, int),
+        packed = packed_setpoints(target_system=np.arange(1, 6), target_component=np.ones(5, int),
                                   time_boot_ms=times, accel_xy_ned=accel, vertical=vertical,
                                   kind=kind)
-        for i, (frame, enc) in enumerate(zip(frames, packed_side, strict=True)):
+        stamped = batch.stamp(packed, SETPOINT_MESSAGE.crc_extra)
+        for i, enc in enumerate(row_side):
             channel = {"z_ned": vertical[i]} if kind[i] == MASK_ACCEL_XY_POS_Z else \
                 {"az_ned": vertical[i]}
             one = single_side[i].encode_fields(SETPOINT_MESSAGE, *accel_setpoint_fields(
                 target_system=i + 1, target_component=1, time_boot_ms=int(times[i]),
                 accel_xy_ned=(accel[i, 0], accel[i, 1]), **channel))
-            assert enc.restamp(frame, SETPOINT_MESSAGE.crc_extra) == one
-    (decoded,) = FrameDecoder(datagram=True, signing_key=key, wall_clock=lambda: 1.7e9).feed(one)
+            assert enc.restamp(packed[i].tobytes(), SETPOINT_MESSAGE.crc_extra) == one
+            assert stamped[i] == one, (tick, i)
+    assert [e.frames_sent for e in batch_side] == [300] * 5
+    (decoded,) = FrameDecoder(datagram=True, signing_key=key if keys[4] else None,
+                              wall_clock=lambda: 1.7e9).feed(one)
     assert read_setpoint(decoded) is not None and decoded.target_system == 5
+
+
+def test_a_batch_drops_trailing_zeros_per_row_as_single_encoding_does() -> None:
+    position = v20.MAVLink_local_position_ned_message
+    rows = np.array([[5, 1.0, 2.0, -3.0, 0.0, 0.0, 0.0], [6, 1.0, 2.0, -3.0, 0.5, 0.0, 0.25],
+                     [0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]])
+    packed = packed_rows(position, 3, dict(zip(position.ordered_fieldnames, rows.T, strict=True)))
+    frames = EncoderBatch([gcs_encoder() for _ in range(3)]).stamp(packed, position.crc_extra)
+    single = gcs_encoder()
+    for frame, values in zip(frames, rows.tolist(), strict=True):
+        single._mav.seq = 0
+        assert frame == single.encode(position(int(values[0]), *values[1:]))
+    assert [f[1] for f in frames] == [16, 28, 1]  # payload lengths: zeros dropped, at least 1
+    with pytest.raises(ValueError, match="3 packed frames for 2 encoders"):
+        EncoderBatch([gcs_encoder(), gcs_encoder()]).stamp(packed, position.crc_extra)
 
 
 def test_messages_with_array_fields_cannot_be_packed_in_bulk() -> None:

@@ -13,22 +13,24 @@ import re
 import struct
 import threading
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
 from gcs.link.crc import frame_crc
 from gcs.link.dialect import MavMessage, mavlink
 from gcs.link.signing import SigningKey, signature, signing_timestamp
+from gcs.link.stamp import HEADER_SIZE, stamp_frames
 
-__all__ = ["DEFAULT_GCS_COMPONENT_ID", "DEFAULT_GCS_SYSTEM_ID", "MavlinkEncoder", "frame_dtype",
-           "packed_frames"]
+__all__ = ["DEFAULT_GCS_COMPONENT_ID", "DEFAULT_GCS_SYSTEM_ID", "EncoderBatch", "MavlinkEncoder",
+           "frame_dtype", "packed_frames", "packed_rows"]
 
 DEFAULT_GCS_SYSTEM_ID = 245
 """The GCS's own MAVLink system id unless configured otherwise."""
 
 _HEADER = struct.Struct("<BBBBBBBHB")
 _HEADER_SIZE = _HEADER.size
+assert _HEADER_SIZE == HEADER_SIZE
 _CRC = struct.Struct("<H")
 _SIGNATURE_STAMP = struct.Struct("<BQ")
 _IFLAG_SIGNED = mavlink.MAVLINK_IFLAG_SIGNED
@@ -68,13 +70,14 @@ def frame_dtype(message_type: type[MavMessage]) -> np.dtype:
     return np.dtype(header + fields)
 
 
-def packed_frames(message_type: type[MavMessage], n: int,
-                  fields: Mapping[str, np.ndarray | float]) -> list[bytes]:
-    """``n`` packed frames of ``message_type`` at once, for :meth:`MavlinkEncoder.restamp`.
+def packed_rows(message_type: type[MavMessage], n: int,
+                fields: Mapping[str, np.ndarray | float]) -> np.ndarray:
+    """``n`` packed frames of ``message_type`` at once, as an (n, size) uint8 array.
 
     ``fields``: payload field name to one value or one per frame; the others
     are zero. Why: one numpy fill for a whole fleet's setpoints costs what
-    packing two of them one by one does.
+    packing two of them one by one does. Finish them with
+    :meth:`EncoderBatch.stamp` (or :meth:`MavlinkEncoder.restamp` row by row).
     """
     rows = np.zeros(n, frame_dtype(message_type))
     rows["marker"] = mavlink.PROTOCOL_MARKER_V2
@@ -82,9 +85,13 @@ def packed_frames(message_type: type[MavMessage], n: int,
     rows["msgid_hi"] = message_type.id >> 16
     for name, value in fields.items():
         rows[name] = value
-    size = rows.dtype.itemsize
-    data = rows.tobytes()
-    return [data[k:k + size] for k in range(0, n * size, size)]
+    return rows.view(np.uint8).reshape(n, rows.dtype.itemsize)
+
+
+def packed_frames(message_type: type[MavMessage], n: int,
+                  fields: Mapping[str, np.ndarray | float]) -> list[bytes]:
+    """The rows of :func:`packed_rows` as bytes, for :meth:`MavlinkEncoder.restamp`."""
+    return [row.tobytes() for row in packed_rows(message_type, n, fields)]
 
 
 def _check_id(name: str, value: int) -> int:
@@ -189,3 +196,51 @@ class MavlinkEncoder:
             mav.seq = (mav.seq + 1) & 0xFF
             self.frames_sent += 1
         return frame
+
+
+class EncoderBatch:
+    """Encoders that each send one frame at the same moment: a fleet's setpoints.
+
+    :meth:`stamp` gives every encoder its next frame from one row of packed
+    frames, as :meth:`MavlinkEncoder.restamp` does, in one compiled pass
+    (:func:`gcs.link.stamp.stamp_frames`) for the unsigned ones. Not locked:
+    the caller serializes each encoder's frames (:class:`gcs.link.Link`'s send
+    lock), since a numbered frame must leave before the next is numbered.
+    """
+
+    def __init__(self, encoders: Sequence[MavlinkEncoder]) -> None:
+        self._encoders = tuple(encoders)
+        self._mavs = [e._mav for e in self._encoders]
+        self._sysid = np.array([m.srcSystem for m in self._mavs], np.uint8)
+        self._compid = np.array([m.srcComponent for m in self._mavs], np.uint8)
+        self._signed = [i for i, e in enumerate(self._encoders) if e.signed]
+        self._plain = [i for i, e in enumerate(self._encoders) if not e.signed]
+
+    def __len__(self) -> int:
+        return len(self._encoders)
+
+    def encoder(self, i: int) -> MavlinkEncoder:
+        """The encoder of row ``i``."""
+        return self._encoders[i]
+
+    def stamp(self, packed: np.ndarray, crc_extra: int) -> list[bytes]:
+        """Row ``i`` of ``packed`` (:func:`packed_rows`) as encoder ``i``'s next frame."""
+        n = len(self._encoders)
+        if packed.shape[0] != n:
+            raise ValueError(f"{packed.shape[0]} packed frames for {n} encoders")
+        mavs = self._mavs
+        seq = np.fromiter([m.seq for m in mavs], np.uint8, n)
+        out = np.empty((n, packed.shape[1] + 2), np.uint8)
+        lengths = stamp_frames(packed, seq, self._sysid, self._compid, crc_extra, out)
+        width = out.shape[1]
+        data = out.tobytes()
+        frames = [data[k:k + size] for k, size in zip(range(0, n * width, width),
+                                                      lengths.tolist(), strict=True)]
+        following = ((seq + 1) & 0xFF).tolist()
+        for i in self._plain:
+            mavs[i].seq = following[i]
+            self._encoders[i].frames_sent += 1
+        for i in self._signed:  # numbered and signed one by one, as restamp does
+            mavs[i].seq = int(seq[i])
+            frames[i] = self._encoders[i].restamp(packed[i].tobytes(), crc_extra)
+        return frames

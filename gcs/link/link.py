@@ -71,7 +71,8 @@ class Link:
                  command_in_progress_timeout_s: float = 10.0,
                  heartbeat_timeout_s: float = 3.0,
                  gcs_heartbeat_period_s: float = 1.0, timesync_period_s: float = 1.0,
-                 service_offset_s: float = 0.0) -> None:
+                 service_offset_s: float = 0.0,
+                 send_lock: threading.Lock | None = None) -> None:
         if isinstance(sysid, bool) or not isinstance(sysid, int) or not 1 <= sysid <= 255:
             raise ValueError(f"vehicle system id must be an integer 1..255, got {sysid!r}")
         if sysid == gcs_system_id:
@@ -107,7 +108,8 @@ class Link:
         self._timesync_sent: deque[int] = deque(maxlen=16)
 
         self._command_lock = threading.Lock()
-        self._send_lock = threading.Lock()
+        # Links that a Fanout sends to together share one (see LinkManager).
+        self._send_lock = send_lock if send_lock is not None else threading.Lock()
         self._message_listeners: list[Callable[[MavMessage], None]] = []
         self._record_listeners: list[Callable[[Record], None]] = []
         self._frame_listeners: list[Callable[[FrameDirection, bytes], None]] = []

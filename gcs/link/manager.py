@@ -63,6 +63,8 @@ class LinkManager:
         self._receiver: FleetReceiver | None = None
         self._stop = threading.Event()
         self._checker: threading.Thread | None = None
+        # One send lock for every link: a Fanout sends the fleet's setpoints under it at once.
+        self._send_lock = threading.Lock()
         # Configuration errors (key files) before any port or session is opened.
         keys = {c.sysid: self._load_key(c) for c in links}
         try:
@@ -168,7 +170,7 @@ class LinkManager:
                         heartbeat_timeout_s=config.heartbeat_timeout_s,
                         gcs_heartbeat_period_s=self._settings.heartbeat_period_s,
                         timesync_period_s=self._settings.timesync_period_s,
-                        service_offset_s=service_offset_s)
+                        service_offset_s=service_offset_s, send_lock=self._send_lock)
             return link.start(background=False)
         except BaseException:
             transport.close()

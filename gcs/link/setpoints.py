@@ -21,7 +21,7 @@ from enum import Enum, IntFlag
 import numpy as np
 
 from gcs.link.dialect import MavMessage, mavlink
-from gcs.link.encoder import packed_frames
+from gcs.link.encoder import packed_rows
 
 __all__ = [
     "MASK_ACCEL",
@@ -119,8 +119,9 @@ def accel_setpoint_fields(*, target_system: int, target_component: int, time_boo
 
 def packed_setpoints(*, target_system: np.ndarray, target_component: np.ndarray,
                      time_boot_ms: np.ndarray, accel_xy_ned: np.ndarray, vertical: np.ndarray,
-                     kind: np.ndarray) -> list[bytes]:
-    """A fleet's setpoints packed at once, one per row, for :meth:`Link.send_packed`.
+                     kind: np.ndarray) -> np.ndarray:
+    """A fleet's setpoints packed at once, one per row (:func:`~gcs.link.encoder.packed_rows`),
+    for :class:`~gcs.link.fanout.Fanout`.
 
     Per vehicle: ``accel_xy_ned`` (n, 2) m/s^2, ``vertical`` (n,) the z (m, down)
     or the down acceleration (m/s^2) as the ``kind`` (n,) type mask says
@@ -128,7 +129,7 @@ def packed_setpoints(*, target_system: np.ndarray, target_component: np.ndarray,
     (the caller checks: a refused row must not reach the vehicle at all).
     """
     z_channel = kind == MASK_ACCEL_XY_POS_Z
-    return packed_frames(SETPOINT_MESSAGE, len(kind), {
+    return packed_rows(SETPOINT_MESSAGE, len(kind), {
         "time_boot_ms": time_boot_ms, "z": np.where(z_channel, vertical, 0.0),
         "afx": accel_xy_ned[:, 0], "afy": accel_xy_ned[:, 1],
         "afz": np.where(z_channel, 0.0, vertical), "type_mask": kind,
