@@ -44,7 +44,7 @@ from gcs.guidance import Guidance, MotionDemand
 from gcs.link.errors import LinkError
 from gcs.link.fanout import Fanout
 from gcs.link.profile import AutopilotProfile
-from gcs.link.setpoints import SETPOINT_MESSAGE, packed_setpoints
+from gcs.link.setpoints import SETPOINT_MESSAGE, SetpointPacker
 from gcs.operator import OperatorCommand, OperatorSnapshot
 from gcs.phases import Action, Phase, PhaseError, next_phase
 from gcs.recorder import TlogRecorder, team_header
@@ -125,9 +125,11 @@ class Runtime:
         self.profiles = profiles
         self._profile_list = [profiles[vid] for vid in self.ids]
         links = [p.link for p in self._profile_list]
-        self._targets = np.array([(link.sysid, link.target_component) for link in links])
-        self._boot_times = np.array([link.boot_time for link in links])
-        self._kinds = np.array([p.setpoint_kind.type_mask for p in self._profile_list])
+        targets = np.array([(link.sysid, link.target_component) for link in links]).reshape(-1, 2)
+        self._packer = SetpointPacker(
+            target_system=targets[:, 0], target_component=targets[:, 1],
+            kind=np.array([p.setpoint_kind.type_mask for p in self._profile_list]),
+            boot_time=np.array([link.boot_time for link in links]))
         self._fanout = Fanout(links)
         self.fleet_table = FleetTable(self.ids, profiles)
         """The team's latest telemetry, kept current by the links (the UI reads it too)."""
@@ -409,7 +411,8 @@ class Runtime:
             accel = self._stream(fleet, demand, op)
             self._streamed = accel
             self._advance(phase, op, now)
-        self._accel_last = float(np.linalg.norm(accel, axis=1).max()) if len(accel) else 0.0
+        self._accel_last = math.sqrt(float(np.einsum("ij,ij->i", accel, accel).max())) \
+            if len(accel) else 0.0
         errors = self.team.formation.distance_errors(fleet.p_ned[:, :2], demand.scale)
         truth = self.truth_source() if self.truth_source is not None else None
         phase = self.phase  # after this tick's transitions: the recorder and the snapshot agree
@@ -456,12 +459,12 @@ class Runtime:
                 op: OperatorSnapshot) -> np.ndarray:
         """Guidance and one setpoint per vehicle; errors are per vehicle."""
         p, v = fleet.p_ned[:, :2], fleet.v_ned[:, :2]
-        known = np.all(np.isfinite(p), axis=1) & np.all(np.isfinite(v), axis=1)
-        if known.all():
+        if np.isfinite(p).all() and np.isfinite(v).all():
             accel = self.guidance.accelerations(p, v, fleet.yaw, demand)
+            if not np.isfinite(accel).all():
+                accel = np.nan_to_num(accel, nan=0.0, posinf=0.0, neginf=0.0)
         else:  # cannot place every vehicle: hold still horizontally
             accel = np.zeros((fleet.n, 2))
-        accel = np.nan_to_num(accel, nan=0.0, posinf=0.0, neginf=0.0)
         self._send_all(accel, z_ned=-op.altitude)
         return accel
 
@@ -481,11 +484,6 @@ class Runtime:
                 vertical[i] = math.nan
                 refused.add(i)
                 self._not_sent(i, exc)
-        time_ms = ((time.monotonic() - self._boot_times) * 1000.0).astype(np.int64) & 0xFFFFFFFF
-        packed = packed_setpoints(target_system=self._targets[:, 0],
-                                  target_component=self._targets[:, 1], time_boot_ms=time_ms,
-                                  accel_xy_ned=accel, vertical=np.nan_to_num(vertical),
-                                  kind=self._kinds)
         finite = np.isfinite(vertical)
         only = None
         if not finite.all():
@@ -493,6 +491,8 @@ class Runtime:
             for i in np.flatnonzero(~finite).tolist():
                 if i not in refused:  # a refusal is reported above
                     self._not_sent(i, f"vertical setpoint not finite: {vertical[i]}")
+            vertical = np.nan_to_num(vertical)
+        packed = self._packer.pack(time.monotonic(), accel, vertical)
         for i, exc in self._fanout.send(packed, SETPOINT_MESSAGE.crc_extra, only).items():
             self._not_sent(i, exc)
 

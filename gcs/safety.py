@@ -23,14 +23,16 @@ reported as stale.
 from __future__ import annotations
 
 import enum
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from gcs.config import SafetyConfig
 
-__all__ = ["SafetyEvent", "SafetyReason", "SafetyVerdict", "evaluate"]
+__all__ = ["SafetyEvent", "SafetyReason", "SafetyVerdict", "evaluate", "rule_flags"]
 
 
 class SafetyReason(enum.Enum):
@@ -87,38 +89,35 @@ def evaluate(cfg: SafetyConfig, ids: Sequence[int], age: np.ndarray, p_ned: np.n
             (with ``modes``).
     """
     events: list[SafetyEvent] = []
-    # Masks over the whole team, then a loop over the offenders only: the loop runs
-    # every tick for up to a hundred vehicles, and nearly always finds none.
-    known = np.all(np.isfinite(p_ned), axis=1)
-    lost = age > cfg.land_after
-    fresh = np.isfinite(age) & (age <= cfg.stale_after) & known
-    for i in np.flatnonzero(lost | ~fresh):
+    # Flags over the whole team in one compiled pass, then a loop over the offenders
+    # only: the loop runs every tick for up to a hundred vehicles, and nearly always
+    # finds none (as numpy masks this took 0.3 ms of the 4 Hz tick).
+    age, p_ned = np.asarray(age, dtype=float), np.asarray(p_ned, dtype=float)
+    r = np.empty(len(age))
+    flags = rule_flags(age, p_ned, cfg.land_after, cfg.stale_after, cfg.geofence_xy,
+                       cfg.geofence_altitude, safe_radius, r)
+    land = False
+    for i in np.flatnonzero(flags & (LOST | STALE)).tolist():
         vid = ids[i]
-        if lost[i]:
+        if flags[i] & LOST:
+            land = True
             events.append(SafetyEvent(SafetyReason.LOST, vid,
                                       f"vehicle {vid}: {_silent(age[i])}: landing the team"))
         else:
             events.append(SafetyEvent(SafetyReason.STALE, vid,
                                       f"vehicle {vid}: {_silent(age[i])}: motion frozen"))
-    with np.errstate(invalid="ignore"):  # NaN rows are not fresh and never compared
-        outside = fresh & ((np.abs(p_ned[:, :2]).max(axis=1) > cfg.geofence_xy)
-                           | (-p_ned[:, 2] > cfg.geofence_altitude))
-    for i in np.flatnonzero(outside):
+    for i in np.flatnonzero(flags & OUTSIDE).tolist():
         vid, (x, y, z) = ids[i], p_ned[i]
         events.append(SafetyEvent(SafetyReason.GEOFENCE, vid,
                                   f"vehicle {vid}: at ({x:.2f}, {y:.2f}, {-z:.2f}) m, "
                                   f"outside the geofence: motion frozen"))
-    if fresh.size and fresh.all():
-        xy = p_ned[:, :2]
-        r = np.linalg.norm(xy - xy.mean(axis=0), axis=1)
-        for i in np.flatnonzero(r > safe_radius):
-            vid = ids[i]
-            events.append(SafetyEvent(SafetyReason.DEFORMATION, vid,
-                                      f"vehicle {vid}: {r[i]:.2f} m from the centroid, "
-                                      f"safe bound {safe_radius:.2f} m: motion frozen"))
-    land = bool(lost.any())
+    for i in np.flatnonzero(flags & DEFORMED).tolist():
+        vid = ids[i]
+        events.append(SafetyEvent(SafetyReason.DEFORMATION, vid,
+                                  f"vehicle {vid}: {r[i]:.2f} m from the centroid, "
+                                  f"safe bound {safe_radius:.2f} m: motion frozen"))
     for i, (mode, want) in enumerate(zip(modes, expected, strict=True)):
-        if mode == want or not fresh[i]:  # a silent vehicle is reported as such, above
+        if mode == want or flags[i] & STALE:  # a silent vehicle is reported as such, above
             continue
         vid = ids[i]
         if coming_down is not None and coming_down[i]:
@@ -132,6 +131,51 @@ def evaluate(cfg: SafetyConfig, ids: Sequence[int], age: np.ndarray, p_ned: np.n
     if not events:
         return _OK
     return SafetyVerdict(freeze=True, land=land, events=tuple(events))
+
+
+LOST, STALE, OUTSIDE, DEFORMED = 1, 2, 4, 8
+"""Bits of :func:`rule_flags`, one per rule that looks at the telemetry alone."""
+
+
+@njit(cache=True)
+def rule_flags(age: np.ndarray, p_ned: np.ndarray, land_after: float, stale_after: float,
+               geofence_xy: float, geofence_altitude: float, safe_radius: float,
+               r: np.ndarray) -> np.ndarray:
+    """Which of the telemetry rules each vehicle breaks, as bits (n,) int64.
+
+    ``age`` (n,) s, ``p_ned`` (n, 3) m as :func:`evaluate` takes them. LOST:
+    silent beyond ``land_after`` (never heard counts); STALE: position older
+    than ``stale_after`` or unknown (NaN); OUTSIDE: a fresh vehicle beyond the
+    horizontal box or the ceiling; DEFORMED: farther than ``safe_radius`` from
+    the team's centroid, judged only when every vehicle is fresh (the centroid
+    of a partly known team means nothing). ``r`` receives the distances from
+    the centroid (NaN when not judged).
+    """
+    n = len(age)
+    flags = np.zeros(n, np.int64)
+    fresh_all = n > 0
+    for i in range(n):
+        x, y, z = p_ned[i, 0], p_ned[i, 1], p_ned[i, 2]
+        known = math.isfinite(x) and math.isfinite(y) and math.isfinite(z)
+        if age[i] > land_after:
+            flags[i] |= LOST
+        if not (math.isfinite(age[i]) and age[i] <= stale_after and known):
+            flags[i] |= STALE
+            fresh_all = False
+        elif max(abs(x), abs(y)) > geofence_xy or -z > geofence_altitude:
+            flags[i] |= OUTSIDE
+    r[:] = np.nan
+    if fresh_all:
+        cx = cy = 0.0
+        for i in range(n):
+            cx += p_ned[i, 0]
+            cy += p_ned[i, 1]
+        cx, cy = cx / n, cy / n
+        for i in range(n):
+            r[i] = math.hypot(p_ned[i, 0] - cx, p_ned[i, 1] - cy)
+            if r[i] > safe_radius:
+                flags[i] |= DEFORMED
+    return flags
 
 
 def _silent(seconds: float) -> str:

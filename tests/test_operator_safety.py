@@ -7,7 +7,7 @@ import pytest
 
 from gcs.config import GuidanceConfig, OperatorConfig, SafetyConfig
 from gcs.operator import OperatorCommand, shape_stick
-from gcs.safety import SafetyReason, evaluate
+from gcs.safety import DEFORMED, LOST, OUTSIDE, STALE, SafetyReason, evaluate, rule_flags
 
 OP = OperatorConfig(deadzone=0.1, expo=0.5, stick_timeout=1.0, altitude_rate=0.5,
                     altitude_max=3.0, altitude_step=0.25)
@@ -109,6 +109,33 @@ def test_unknown_position_does_not_raise() -> None:
     p[2] = np.nan
     v = evaluate(SAFE, IDS, np.full(4, 0.1), p, safe_radius=0.79)
     assert v.freeze and v.events[0].reason is SafetyReason.STALE
+
+
+def test_compiled_rule_flags_are_the_rules_as_array_masks() -> None:
+    """rule_flags against the rules written as plain numpy masks, on random teams with
+    NaN positions, never-heard vehicles, stale and lost ones, and some outside the fence."""
+    rng = np.random.default_rng(7)
+    for _ in range(300):
+        n = int(rng.integers(1, 12))
+        age = rng.choice([0.1, 0.4, 0.6, 2.0, 3.5, np.inf, np.nan], n,
+                         p=[0.6, 0.1, 0.08, 0.08, 0.06, 0.04, 0.04])
+        p = rng.normal(0, 2.5, (n, 3))
+        p[rng.random(n) < 0.05, rng.integers(0, 3)] = np.nan
+        r = np.empty(n)
+        flags = rule_flags(age, p, 3.0, 0.5, 4.0, 3.0, 2.0, r)
+        known = np.all(np.isfinite(p), axis=1)
+        with np.errstate(invalid="ignore"):
+            lost = age > 3.0
+            fresh = np.isfinite(age) & (age <= 0.5) & known
+            outside = fresh & ((np.abs(p[:, :2]).max(axis=1) > 4.0) | (-p[:, 2] > 3.0))
+        radius = np.linalg.norm(p[:, :2] - p[:, :2].mean(axis=0), axis=1)
+        deformed = fresh.all() & (radius > 2.0)
+        assert np.array_equal(flags & LOST > 0, lost)
+        assert np.array_equal(flags & STALE > 0, ~fresh)
+        assert np.array_equal(flags & OUTSIDE > 0, outside)
+        assert np.array_equal(flags & DEFORMED > 0, deformed)
+        if fresh.all():
+            assert r == pytest.approx(radius)
 
 
 OFFBOARD = ("OFFBOARD",) * 4

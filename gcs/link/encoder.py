@@ -33,6 +33,7 @@ _HEADER_SIZE = _HEADER.size
 assert _HEADER_SIZE == HEADER_SIZE
 _CRC = struct.Struct("<H")
 _SIGNATURE_STAMP = struct.Struct("<BQ")
+_SIGNATURE_SIZE = 13  # link id, 6-byte timestamp, 6-byte signature
 _IFLAG_SIGNED = mavlink.MAVLINK_IFLAG_SIGNED
 
 
@@ -225,22 +226,29 @@ class EncoderBatch:
 
     def stamp(self, packed: np.ndarray, crc_extra: int) -> list[bytes]:
         """Row ``i`` of ``packed`` (:func:`packed_rows`) as encoder ``i``'s next frame."""
+        data, width, lengths = self.stamp_buffer(packed, crc_extra)
+        return [data[k * width:k * width + size] for k, size in enumerate(lengths)]
+
+    def stamp_buffer(self, packed: np.ndarray, crc_extra: int) -> tuple[bytes, int, list[int]]:
+        """:meth:`stamp` as one buffer: frame ``i`` is ``data[i * width:][:lengths[i]]``.
+
+        Why: the caller slices each frame as it sends it, one loop over the fleet.
+        """
         n = len(self._encoders)
         if packed.shape[0] != n:
             raise ValueError(f"{packed.shape[0]} packed frames for {n} encoders")
         mavs = self._mavs
-        seq = np.fromiter([m.seq for m in mavs], np.uint8, n)
-        out = np.empty((n, packed.shape[1] + 2), np.uint8)
-        lengths = stamp_frames(packed, seq, self._sysid, self._compid, crc_extra, out)
-        width = out.shape[1]
-        data = out.tobytes()
-        frames = [data[k:k + size] for k, size in zip(range(0, n * width, width),
-                                                      lengths.tolist(), strict=True)]
-        following = ((seq + 1) & 0xFF).tolist()
+        seq = np.array([m.seq for m in mavs], np.uint8)
+        # room for a signature where some encoder signs: its frame is put in its row below
+        width = packed.shape[1] + 2 + (_SIGNATURE_SIZE if self._signed else 0)
+        out = np.empty((n, width), np.uint8)
+        lengths = stamp_frames(packed, seq, self._sysid, self._compid, crc_extra, out).tolist()
         for i in self._plain:
-            mavs[i].seq = following[i]
+            mavs[i].seq = (mavs[i].seq + 1) & 0xFF
             self._encoders[i].frames_sent += 1
         for i in self._signed:  # numbered and signed one by one, as restamp does
             mavs[i].seq = int(seq[i])
-            frames[i] = self._encoders[i].restamp(packed[i].tobytes(), crc_extra)
-        return frames
+            frame = self._encoders[i].restamp(packed[i].tobytes(), crc_extra)
+            out[i, :len(frame)] = np.frombuffer(frame, np.uint8)
+            lengths[i] = len(frame)
+        return out.tobytes(), width, lengths

@@ -55,14 +55,32 @@ class Fanout:
         (:class:`LinkError`) or its transport's exception. Never raises for one link.
         """
         failed: dict[int, Exception] = {}
-        rows = list(range(len(self._links))) if only is None else list(only)
-        closed = [i for i in rows if self._stops[i].is_set()]
-        for i in closed:
-            failed[i] = LinkError(self._links[i].sysid, "link is closed")
-        if closed:
-            rows = [i for i in rows if i not in failed]
-        if not rows:
+        whole = only is None or len(only) == len(self._links)
+        rows = range(len(self._links)) if whole else list(only)  # type: ignore[arg-type]
+        batch = self._batch if whole else EncoderBatch([self._batch.encoder(i) for i in rows])
+        if not len(batch):
             return failed
+        for lock in self._locks:
+            lock.acquire()
+        try:
+            data, width, lengths = batch.stamp_buffer(packed if whole else packed[rows],
+                                                      crc_extra)
+            for k, i in enumerate(rows):
+                if self._stops[i].is_set():  # numbered but never sent: the link is gone
+                    failed[i] = LinkError(self._links[i].sysid, "link is closed")
+                    continue
+                frame = data[k * width:k * width + lengths[k]]
+                try:
+                    self._sends[i](frame)
+                except Exception as exc:
+                    failed[i] = exc
+                    continue
+                for listener in self._listeners[i]:
+                    self._links[i]._call(listener, FrameDirection.OUT, frame)
+        finally:
+            for lock in reversed(self._locks):
+                lock.release()
+        return failed
         whole = len(rows) == len(self._links)
         batch = self._batch if whole else EncoderBatch([self._batch.encoder(i) for i in rows])
         for lock in self._locks:

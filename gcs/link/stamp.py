@@ -35,7 +35,7 @@ def stamp_frames(packed: np.ndarray, seq: np.ndarray, sysid: np.ndarray, compid:
     Per row: the payload's trailing zeros dropped (MAVLink 2), length,
     sequence ``seq[i]`` and sender ``sysid[i]``/``compid[i]`` written, no
     incompatibility flags (unsigned), checksum with ``crc_extra`` appended.
-    ``out`` is (n, size + 2) uint8; returns the frame length of each row.
+    ``out`` is (n, size + 2 or more) uint8; returns the frame length of each row.
     """
     n, size = packed.shape
     lengths = np.empty(n, np.int64)
