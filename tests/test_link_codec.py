@@ -21,7 +21,7 @@ from gcs.link import (
     read_setpoint,
 )
 from gcs.link.encoder import EncoderBatch, frame_dtype, packed_rows
-from gcs.link.setpoints import packed_setpoints
+from gcs.link.setpoints import SetpointPacker, packed_setpoints
 from gcs.link.signing import SigningKey
 
 
@@ -252,6 +252,23 @@ def test_a_fleets_packed_setpoints_are_the_frames_encoded_one_by_one(signed: str
     (decoded,) = FrameDecoder(datagram=True, signing_key=key if keys[4] else None,
                               wall_clock=lambda: 1.7e9).feed(one)
     assert read_setpoint(decoded) is not None and decoded.target_system == 5
+
+
+def test_the_loops_setpoint_packer_packs_as_packed_setpoints() -> None:
+    """SetpointPacker (one kernel per tick) == packed_setpoints with time_boot_ms counted from
+    each vehicle's boot time, wrapping at 2^32 ms like the field."""
+    rng = np.random.default_rng(9)
+    for n in (1, 7, 100):
+        kind = rng.choice([MASK_ACCEL, MASK_ACCEL_XY_POS_Z], n)
+        targets, boot = rng.integers(1, 250, n), rng.uniform(0, 100, n)
+        packer = SetpointPacker(target_system=targets, target_component=np.ones(n, int),
+                                kind=kind, boot_time=boot)
+        for now in (150.25, 4.3e6 + 0.5):  # the second is past 2^32 ms since boot
+            accel, vertical = rng.normal(0, 1, (n, 2)), rng.normal(-1, 1, n)
+            stamps = ((now - boot) * 1000).astype(np.int64) & 0xFFFFFFFF
+            assert np.array_equal(packer.pack(now, accel, vertical), packed_setpoints(
+                target_system=targets, target_component=np.ones(n, int), time_boot_ms=stamps,
+                accel_xy_ned=accel, vertical=vertical, kind=kind))
 
 
 def test_a_batch_drops_trailing_zeros_per_row_as_single_encoding_does() -> None:
