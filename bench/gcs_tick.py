@@ -19,6 +19,12 @@ runs 3-4 times slower (packing 100 setpoint frames: 0.14 ms back to back,
 0.5 ms after a 50 ms pause, also with a busy wait instead of the pause), and
 the 4 Hz loop always runs after such a pause.
 
+Also for scale: the cost of one small numpy call back to back and 50 ms after
+the previous one (``numpy_call_us_*``): here about 2 and 60 us. Whatever ran
+in between evicted the caches; the tick's cost after the pause is therefore
+about the number of distinct calls it makes, which is why its numeric work is
+in a few compiled kernels.
+
 For scale, it first measures how late a bare ``time.sleep`` loop wakes on
 this machine (p99, ms): the floor under any jitter figure. It measures the
 same again in a separate process while each team size runs
@@ -170,6 +176,18 @@ def sleep_floor(seconds: float = 2.0, period: float = 0.02) -> float:
     return round(float(np.percentile(late, 99)) * 1e3, 3)
 
 
+def numpy_call_cost(pause: float, count: int = 40) -> float:
+    """Median cost of one small numpy call (us) made ``pause`` s after the previous one."""
+    a = np.zeros(100)
+    costs = []
+    for _ in range(count):
+        time.sleep(pause)
+        t0 = time.perf_counter()
+        np.add(a, 1.0)
+        costs.append(time.perf_counter() - t0)
+    return round(float(np.median(costs)) * 1e6, 1)
+
+
 def main() -> None:
     if len(sys.argv) in (4, 5) and sys.argv[1] == "--play":
         play(sys.argv[2], sys.argv[3], background=sys.argv[4:] == [_BACKGROUND])
@@ -181,6 +199,8 @@ def main() -> None:
     numbers = [a for a in sys.argv[1:] if a != _BACKGROUND]
     seconds = float(numbers[0]) if numbers else 30.0
     out: dict[str, object] = {"sleep_floor_ms_p99": sleep_floor(),
+                              "numpy_call_us_back_to_back": numpy_call_cost(0.0),
+                              "numpy_call_us_after_50ms_sleep": numpy_call_cost(0.05),
                               "vehicles_in_background": background}
     print(f"bare sleep loop wakes late by up to {out['sleep_floor_ms_p99']} ms (p99)",
           file=sys.stderr)

@@ -20,6 +20,7 @@ from gcs.link.dialect import MavMessage, command_name, mavlink, message_id, mess
 from gcs.link.discovery import Discovery, Presence, PresenceEvent, PresenceSource
 from gcs.link.encoder import DEFAULT_GCS_COMPONENT_ID, DEFAULT_GCS_SYSTEM_ID, MavlinkEncoder
 from gcs.link.errors import CommandAck, CommandError, CommandResult, LinkError
+from gcs.link.fanout import Fanout
 from gcs.link.health import LinkHealth
 from gcs.link.link import DEFAULT_TELEMETRY_RATES_HZ, Link
 from gcs.link.manager import LinkManager
@@ -45,6 +46,7 @@ from gcs.link.setpoints import (
     SETPOINT_MESSAGE,
     AccelSetpoint,
     SetpointKind,
+    SetpointPacker,
     accel_setpoint_fields,
     accel_setpoint_message,
     read_setpoint,
@@ -91,6 +93,7 @@ __all__ = [
     "CopterMode",
     "DecodeStats",
     "Discovery",
+    "Fanout",
     "FrameDecoder",
     "FrameDirection",
     "GcsLinkConfig",
@@ -113,6 +116,7 @@ __all__ = [
     "Px4MainMode",
     "Px4Profile",
     "SetpointKind",
+    "SetpointPacker",
     "Severity",
     "SignatureCheck",
     "SigningKey",

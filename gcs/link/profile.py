@@ -94,7 +94,7 @@ class AutopilotProfile(Protocol):
         z itself (m, down) for x/y acceleration with z position; the down
         acceleration (m/s^2) of the profile's own altitude loop for acceleration
         only. Called once per setpoint sent: the loop packs a whole fleet's
-        setpoints at once and sends them with :meth:`Link.send_packed`.
+        setpoints at once and sends them with :class:`~gcs.link.fanout.Fanout`.
         """
         ...
 
