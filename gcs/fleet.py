@@ -9,6 +9,7 @@ code never branches on a vehicle that has not reported yet.
 
 from __future__ import annotations
 
+import functools
 import math
 import threading
 from collections.abc import Mapping, Sequence
@@ -42,6 +43,11 @@ class FleetState:
     @property
     def n(self) -> int:
         return len(self.ids)
+
+    @functools.cached_property
+    def located(self) -> bool:
+        """Whether every vehicle's horizontal position and velocity are known (finite)."""
+        return _all_finite(self.p_ned, self.v_ned)
 
 
 _P, _V, _T_POS = slice(0, 3), slice(3, 6), 6  # columns of the table
@@ -111,6 +117,16 @@ class FleetTable:
         return FleetState(t=now, ids=self.ids, p_ned=rows[:, _P], v_ned=rows[:, _V], yaw=yaw,
                           tilt=tilt, age=age, heartbeat_age=heartbeat_age, armed=armed,
                           battery=rows[:, _BATTERY], modes=modes)
+
+
+@njit(cache=True)
+def _all_finite(p_ned: np.ndarray, v_ned: np.ndarray) -> bool:
+    """Whether x and y of every row of both arrays are finite (one compiled pass)."""
+    for i in range(p_ned.shape[0]):
+        for k in range(2):
+            if not (math.isfinite(p_ned[i, k]) and math.isfinite(v_ned[i, k])):
+                return False
+    return True
 
 
 @njit(cache=True)

@@ -10,10 +10,12 @@ changing any controlled distance, so it is refused here, once, at load time.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 from scipy.optimize import least_squares
 
 __all__ = [
@@ -137,13 +139,30 @@ class Formation:
         return positions[self.edges[:, 0]] - positions[self.edges[:, 1]]
 
     def distance_errors(self, positions: np.ndarray, scale: float = 1.0) -> np.ndarray:
-        """e_k = ||z_k|| - scale * d_k for actual positions (n, 2) -> (m,)."""
-        return np.linalg.norm(self.relative(positions), axis=1) - scale * self.distances
+        """e_k = ||z_k|| - scale * d_k for actual positions (n, 2) -> (m,).
+
+        Compiled (:func:`edge_errors`): the loop computes them every tick, where
+        the five numpy calls this takes otherwise cost 0.1 ms after its pause.
+        """
+        return edge_errors(np.asarray(positions, dtype=float), self.edges, self.distances,
+                           float(scale))
 
     def label(self, k: int) -> str:
         """Human-readable edge name, e.g. ``2-4``, with vehicle ids."""
         i, j = self.edges[k]
         return f"{self.ids[i]}-{self.ids[j]}"
+
+
+@njit(cache=True)
+def edge_errors(positions: np.ndarray, edges: np.ndarray, distances: np.ndarray,
+                scale: float) -> np.ndarray:
+    """||p_i - p_j|| - scale * d_k for each edge k = (i, j); positions (n, 2) -> (m,)."""
+    out = np.empty(len(edges))
+    for k in range(len(edges)):
+        i, j = edges[k, 0], edges[k, 1]
+        out[k] = math.hypot(positions[i, 0] - positions[j, 0],
+                            positions[i, 1] - positions[j, 1]) - scale * distances[k]
+    return out
 
 
 def build_formation(

@@ -458,9 +458,9 @@ class Runtime:
     def _stream(self, fleet: FleetState, demand: MotionDemand,
                 op: OperatorSnapshot) -> np.ndarray:
         """Guidance and one setpoint per vehicle; errors are per vehicle."""
-        p, v = fleet.p_ned[:, :2], fleet.v_ned[:, :2]
-        if np.isfinite(p).all() and np.isfinite(v).all():
-            accel = self.guidance.accelerations(p, v, fleet.yaw, demand)
+        if fleet.located:
+            accel = self.guidance.accelerations(fleet.p_ned[:, :2], fleet.v_ned[:, :2],
+                                                fleet.yaw, demand)
             if not np.isfinite(accel).all():
                 accel = np.nan_to_num(accel, nan=0.0, posinf=0.0, neginf=0.0)
         else:  # cannot place every vehicle: hold still horizontally

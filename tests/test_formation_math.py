@@ -188,3 +188,14 @@ def test_compiled_guidance_matches_the_law_written_as_arrays(config: str) -> Non
         expected = saturate(ned, norm_max=g.accel_norm, axis_max=g.accel_axis)
         np.testing.assert_allclose(g.accelerations(p, v, yaw, demand), expected, atol=1e-12)
         assert np.linalg.norm(expected, axis=1).max() <= g.accel_norm + 1e-12
+
+
+@pytest.mark.parametrize("config", ["configs/bebop_square.yaml", "configs/bebop_hexagon.yaml"])
+def test_compiled_distance_errors_are_the_norms_of_the_edge_vectors(config: str) -> None:
+    formation = load_team(config).formation
+    rng = np.random.default_rng(3)
+    for scale in (0.7, 1.0, 1.3):
+        p = rng.normal(0, 2, (formation.n, 3))[:, :2]  # a strided view, as the loop passes
+        z = formation.relative(p)
+        assert formation.distance_errors(p, scale) == pytest.approx(
+            np.linalg.norm(z, axis=1) - scale * formation.distances)
