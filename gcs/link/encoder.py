@@ -23,7 +23,7 @@ from gcs.link.signing import SigningKey, signature, signing_timestamp
 from gcs.link.stamp import HEADER_SIZE, stamp_frames
 
 __all__ = ["DEFAULT_GCS_COMPONENT_ID", "DEFAULT_GCS_SYSTEM_ID", "EncoderBatch", "MavlinkEncoder",
-           "frame_dtype", "packed_frames", "packed_rows"]
+           "frame_dtype", "packed_rows"]
 
 DEFAULT_GCS_SYSTEM_ID = 245
 """The GCS's own MAVLink system id unless configured otherwise."""
@@ -87,12 +87,6 @@ def packed_rows(message_type: type[MavMessage], n: int,
     for name, value in fields.items():
         rows[name] = value
     return rows.view(np.uint8).reshape(n, rows.dtype.itemsize)
-
-
-def packed_frames(message_type: type[MavMessage], n: int,
-                  fields: Mapping[str, np.ndarray | float]) -> list[bytes]:
-    """The rows of :func:`packed_rows` as bytes, for :meth:`MavlinkEncoder.restamp`."""
-    return [row.tobytes() for row in packed_rows(message_type, n, fields)]
 
 
 def _check_id(name: str, value: int) -> int:
@@ -162,7 +156,7 @@ class MavlinkEncoder:
 
         ``packed`` is a MAVLink 2 header (marker and message id set; length,
         flags, sequence and sender ids are overwritten) and the full payload,
-        without checksum, as :func:`packed_frames` builds many at once. The
+        without checksum, as a row of :func:`packed_rows` holds it. The
         payload's trailing zeros are dropped, as MAVLink 2 requires.
         """
         if packed[-1] == 0:  # rare: most messages end in a non-zero field

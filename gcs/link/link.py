@@ -279,11 +279,6 @@ class Link:
         """Encode (and sign) ``msg`` as the GCS and send it; non-blocking."""
         self._send_frame(self._encoder.encode, msg)
 
-    def send_packed(self, packed: bytes, crc_extra: int) -> None:
-        """Send a frame packed elsewhere (:func:`gcs.link.encoder.packed_frames`) as the
-        GCS's next frame on this link: numbered, checksummed and signed here."""
-        self._send_frame(self._encoder.restamp, packed, crc_extra)
-
     @property
     def boot_time(self) -> float:
         """Monotonic time (s) that the ``time_boot_ms`` of the GCS's frames counts from."""
