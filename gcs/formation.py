@@ -160,8 +160,8 @@ def edge_errors(positions: np.ndarray, edges: np.ndarray, distances: np.ndarray,
     out = np.empty(len(edges))
     for k in range(len(edges)):
         i, j = edges[k, 0], edges[k, 1]
-        out[k] = math.hypot(positions[i, 0] - positions[j, 0],
-                            positions[i, 1] - positions[j, 1]) - scale * distances[k]
+        dx, dy = positions[i, 0] - positions[j, 0], positions[i, 1] - positions[j, 1]
+        out[k] = math.sqrt(dx * dx + dy * dy) - scale * distances[k]  # NaN in: NaN out
     return out
 
 

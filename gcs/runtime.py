@@ -143,6 +143,12 @@ class Runtime:
         self.period = 1.0 / team.config.guidance.rate_hz
         self._streaming_modes = tuple(p.streaming_mode for p in self._profile_list)
         self._landing_modes = tuple(p.landing_modes for p in self._profile_list)
+        # Load the tick's compiled kernels now, on the arrays the tick passes them (as the
+        # guidance does): compiling or loading them at the first tick made it late.
+        fleet = self.fleet_table.read(0.0)
+        _ = fleet.located
+        evaluate(team.config.safety, self.ids, fleet.age, fleet.p_ned, safe_radius=1.0)
+        team.formation.distance_errors(fleet.p_ned[:, :2])
         self.setpoints_per_tick = (team.config.guidance.setpoints_per_tick
                                    if setpoints_per_tick is None else setpoints_per_tick)
         if self.setpoints_per_tick < 1:

@@ -49,6 +49,7 @@ def test_rows_follow_each_vehicles_telemetry(rigs: list[Rig]) -> None:
     assert np.all(np.isnan(state.p_ned[1])) and math.isinf(state.age[1])
     assert state.modes == ("unknown", "unknown") and not state.armed.any()
     assert np.isnan(state.tilt).all() and np.all(state.yaw == 0.0)
+    assert not state.located  # vehicle 9 never reported: the loop holds still
 
     second.send(position(second, -1.0, 0.5, -2.0),
                 heartbeat(second, armed=True, custom_mode=SimMode.OFFBOARD),
@@ -59,6 +60,7 @@ def test_rows_follow_each_vehicles_telemetry(rigs: list[Rig]) -> None:
     state = table.read(now)
     np.testing.assert_allclose(state.p_ned[1], [-1.0, 0.5, -2.0])
     assert state.armed.tolist() == [False, True]
+    assert state.located
     assert state.yaw[1] == pytest.approx(1.5, abs=1e-6)
     assert state.tilt[1] == pytest.approx(math.acos(math.cos(0.1) * math.cos(0.2)), abs=1e-6)
     assert 0.0 <= state.age[1] < 1.0 and 0.0 <= state.heartbeat_age[1] < 1.0

@@ -218,6 +218,13 @@ class EncoderBatch:
         """The encoder of row ``i``."""
         return self._encoders[i]
 
+    def load_kernel(self) -> None:
+        """Compile or load the stamping kernel now (up to a second the first time), so the
+        first :meth:`stamp` does not wait for it."""
+        rows = np.zeros((1, HEADER_SIZE + 1), np.uint8)
+        one = np.zeros(1, np.uint8)
+        stamp_frames(rows, one, one, one, 0, np.empty((1, HEADER_SIZE + 3), np.uint8))
+
     def stamp(self, packed: np.ndarray, crc_extra: int) -> list[bytes]:
         """Row ``i`` of ``packed`` (:func:`packed_rows`) as encoder ``i``'s next frame."""
         data, width, lengths = self.stamp_buffer(packed, crc_extra)
@@ -240,8 +247,7 @@ class EncoderBatch:
         for i in self._plain:
             mavs[i].seq = (mavs[i].seq + 1) & 0xFF
             self._encoders[i].frames_sent += 1
-        for i in self._signed:  # numbered and signed one by one, as restamp does
-            mavs[i].seq = int(seq[i])
+        for i in self._signed:  # numbered (from seq[i]) and signed one by one by restamp
             frame = self._encoders[i].restamp(packed[i].tobytes(), crc_extra)
             out[i, :len(frame)] = np.frombuffer(frame, np.uint8)
             lengths[i] = len(frame)

@@ -42,6 +42,7 @@ class Fanout:
         # Taken in one global order, so two fanouts over overlapping links cannot deadlock.
         locks = {id(link._send_lock): link._send_lock for link in self._links}
         self._locks: list[threading.Lock] = [locks[k] for k in sorted(locks)]
+        self._batch.load_kernel()  # not at the first send, under every link's lock
 
     def __len__(self) -> int:
         return len(self._links)
@@ -50,13 +51,21 @@ class Fanout:
              only: Sequence[int] | None = None) -> dict[int, Exception]:
         """Send row ``i`` of ``packed`` (:func:`~gcs.link.encoder.packed_rows`) to link ``i``.
 
-        ``only``: the rows to send (all by default); the others are neither
-        numbered nor sent. Returns the links that failed, by row: a closed link
-        (:class:`LinkError`) or its transport's exception. Never raises for one link.
+        ``only``: the rows to send (distinct; all by default); the others are
+        neither numbered nor sent. Returns the links that failed, by row: a
+        closed link (:class:`LinkError`) or its transport's exception. Never
+        raises for one link. Frame listeners run under the send locks, in
+        sequence order (see :meth:`Link.add_frame_listener`).
         """
         failed: dict[int, Exception] = {}
-        whole = only is None or len(only) == len(self._links)
-        rows = range(len(self._links)) if whole else list(only)  # type: ignore[arg-type]
+        n = len(self._links)
+        if only is None:
+            rows: Sequence[int] = range(n)
+        else:
+            rows = sorted(set(only))
+            if len(rows) != len(only) or (rows and not 0 <= rows[0] <= rows[-1] < n):
+                raise ValueError(f"only: rows must be distinct, in 0..{n - 1}: {list(only)}")
+        whole = len(rows) == n
         batch = self._batch if whole else EncoderBatch([self._batch.encoder(i) for i in rows])
         if not len(batch):
             return failed
@@ -66,28 +75,10 @@ class Fanout:
             data, width, lengths = batch.stamp_buffer(packed if whole else packed[rows],
                                                       crc_extra)
             for k, i in enumerate(rows):
-                if self._stops[i].is_set():  # numbered but never sent: the link is gone
+                if self._stops[i].is_set():  # numbered, never sent: closed for good
                     failed[i] = LinkError(self._links[i].sysid, "link is closed")
                     continue
                 frame = data[k * width:k * width + lengths[k]]
-                try:
-                    self._sends[i](frame)
-                except Exception as exc:
-                    failed[i] = exc
-                    continue
-                for listener in self._listeners[i]:
-                    self._links[i]._call(listener, FrameDirection.OUT, frame)
-        finally:
-            for lock in reversed(self._locks):
-                lock.release()
-        return failed
-        whole = len(rows) == len(self._links)
-        batch = self._batch if whole else EncoderBatch([self._batch.encoder(i) for i in rows])
-        for lock in self._locks:
-            lock.acquire()
-        try:
-            frames = batch.stamp(packed if whole else packed[rows], crc_extra)
-            for i, frame in zip(rows, frames, strict=True):
                 try:
                     self._sends[i](frame)
                 except Exception as exc:

@@ -265,6 +265,10 @@ class Link:
         """Call ``callback(direction, frame)`` for every accepted frame in and every frame out.
 
         Incoming frames from other system ids are included (a recorder wants them).
+        Outgoing frames are handed over under the send lock, so a recorder sees
+        them in sequence order; that lock is shared by the links of one
+        :class:`~gcs.link.manager.LinkManager`, so the callback must be quick and
+        must never send (it would wait for the lock it runs under).
         """
         self._frame_listeners.append(callback)
 

@@ -158,22 +158,26 @@ class SetpointPacker:
             vertical=np.zeros(n), kind=kind)
         self._z_channel = np.asarray(kind) == MASK_ACCEL_XY_POS_Z
         self._boot_time = np.asarray(boot_time, dtype=float)
+        self.pack(0.0, np.zeros((n, 2)), np.zeros(n))  # compile or load the kernel now
 
     def pack(self, now: float, accel_xy_ned: np.ndarray, vertical: np.ndarray) -> np.ndarray:
         """Rows for monotonic time ``now`` (s; ``time_boot_ms`` counts from each vehicle's
         ``boot_time``), ``accel_xy_ned`` (n, 2) and ``vertical`` (n,) (z or az by kind)."""
         return _pack(self._template, self._z_channel, self._boot_time, now,
-                     np.asarray(accel_xy_ned, dtype=float), np.asarray(vertical, dtype=float))
+                     np.asarray(accel_xy_ned, dtype=float), np.asarray(vertical, dtype=float),
+                     _OFFSETS)
 
 
-_T_MS, _Z, _AFX, _AFY, _AFZ = (int(frame_dtype(SETPOINT_MESSAGE).fields[name][1])
-                                for name in ("time_boot_ms", "z", "afx", "afy", "afz"))
-"""Byte offsets in a packed row of the fields that change from tick to tick."""
+_OFFSETS = np.array([frame_dtype(SETPOINT_MESSAGE).fields[name][1]
+                     for name in ("time_boot_ms", "z", "afx", "afy", "afz")], np.int64)
+"""Byte offsets in a packed row of the fields that change from tick to tick (an argument
+of the kernel, not a constant compiled into its cache)."""
 
 
 @njit(cache=True)
 def _pack(template: np.ndarray, z_channel: np.ndarray, boot_time: np.ndarray, now: float,
-          accel: np.ndarray, vertical: np.ndarray) -> np.ndarray:
+          accel: np.ndarray, vertical: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    t_ms, z, afx, afy, afz = offsets[0], offsets[1], offsets[2], offsets[3], offsets[4]
     out = template.copy()
     f32 = np.empty(1, np.float32)
     f32_bytes = f32.view(np.uint8)
@@ -181,9 +185,9 @@ def _pack(template: np.ndarray, z_channel: np.ndarray, boot_time: np.ndarray, no
     u32_bytes = u32.view(np.uint8)
     for i in range(out.shape[0]):
         u32[0] = np.uint32(np.int64((now - boot_time[i]) * 1000.0) & 0xFFFFFFFF)
-        out[i, _T_MS:_T_MS + 4] = u32_bytes
-        for offset, value in ((_AFX, accel[i, 0]), (_AFY, accel[i, 1]),
-                              (_Z if z_channel[i] else _AFZ, vertical[i])):
+        out[i, t_ms:t_ms + 4] = u32_bytes
+        for offset, value in ((afx, accel[i, 0]), (afy, accel[i, 1]),
+                              (z if z_channel[i] else afz, vertical[i])):
             f32[0] = value
             out[i, offset:offset + 4] = f32_bytes
     return out
