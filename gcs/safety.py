@@ -96,9 +96,10 @@ def evaluate(cfg: SafetyConfig, ids: Sequence[int], age: np.ndarray, p_ned: np.n
     r = np.empty(len(age))
     flags = rule_flags(age, p_ned, cfg.land_after, cfg.stale_after, cfg.geofence_xy,
                        cfg.geofence_altitude, safe_radius, r)
+    if not flags.any() and not modes:  # nearly every tick: no rule to look further at
+        return _OK
     land = False
-    offenders = flags.any()  # the rare case: one check when every vehicle is fine
-    for i in np.flatnonzero(flags & (LOST | STALE)).tolist() if offenders else ():
+    for i in np.flatnonzero(flags & (LOST | STALE)).tolist():
         vid = ids[i]
         if flags[i] & LOST:
             land = True
@@ -107,12 +108,12 @@ def evaluate(cfg: SafetyConfig, ids: Sequence[int], age: np.ndarray, p_ned: np.n
         else:
             events.append(SafetyEvent(SafetyReason.STALE, vid,
                                       f"vehicle {vid}: {_silent(age[i])}: motion frozen"))
-    for i in np.flatnonzero(flags & OUTSIDE).tolist() if offenders else ():
+    for i in np.flatnonzero(flags & OUTSIDE).tolist():
         vid, (x, y, z) = ids[i], p_ned[i]
         events.append(SafetyEvent(SafetyReason.GEOFENCE, vid,
                                   f"vehicle {vid}: at ({x:.2f}, {y:.2f}, {-z:.2f}) m, "
                                   f"outside the geofence: motion frozen"))
-    for i in np.flatnonzero(flags & DEFORMED).tolist() if offenders else ():
+    for i in np.flatnonzero(flags & DEFORMED).tolist():
         vid = ids[i]
         events.append(SafetyEvent(SafetyReason.DEFORMATION, vid,
                                   f"vehicle {vid}: {r[i]:.2f} m from the centroid, "

@@ -20,7 +20,7 @@ import numpy as np
 from gcs.link.crc import frame_crc
 from gcs.link.dialect import MavMessage, mavlink
 from gcs.link.signing import SigningKey, signature, signing_timestamp
-from gcs.link.stamp import HEADER_SIZE, stamp_frames
+from gcs.link.stamp import stamp_frames
 
 __all__ = ["DEFAULT_GCS_COMPONENT_ID", "DEFAULT_GCS_SYSTEM_ID", "EncoderBatch", "MavlinkEncoder",
            "frame_dtype", "packed_rows"]
@@ -30,7 +30,6 @@ DEFAULT_GCS_SYSTEM_ID = 245
 
 _HEADER = struct.Struct("<BBBBBBBHB")
 _HEADER_SIZE = _HEADER.size
-assert _HEADER_SIZE == HEADER_SIZE
 _CRC = struct.Struct("<H")
 _SIGNATURE_STAMP = struct.Struct("<BQ")
 _SIGNATURE_SIZE = 13  # link id, 6-byte timestamp, 6-byte signature
@@ -211,9 +210,6 @@ class EncoderBatch:
         self._signed = [i for i, e in enumerate(self._encoders) if e.signed]
         self._plain = [i for i, e in enumerate(self._encoders) if not e.signed]
 
-    def __len__(self) -> int:
-        return len(self._encoders)
-
     def encoder(self, i: int) -> MavlinkEncoder:
         """The encoder of row ``i``."""
         return self._encoders[i]
@@ -221,9 +217,9 @@ class EncoderBatch:
     def load_kernel(self) -> None:
         """Compile or load the stamping kernel now (up to a second the first time), so the
         first :meth:`stamp` does not wait for it."""
-        rows = np.zeros((1, HEADER_SIZE + 1), np.uint8)
+        rows = np.zeros((1, _HEADER_SIZE + 1), np.uint8)
         one = np.zeros(1, np.uint8)
-        stamp_frames(rows, one, one, one, 0, np.empty((1, HEADER_SIZE + 3), np.uint8))
+        stamp_frames(rows, one, one, one, 0, np.empty((1, _HEADER_SIZE + 3), np.uint8))
 
     def stamp(self, packed: np.ndarray, crc_extra: int) -> list[bytes]:
         """Row ``i`` of ``packed`` (:func:`packed_rows`) as encoder ``i``'s next frame."""

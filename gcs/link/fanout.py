@@ -44,9 +44,6 @@ class Fanout:
         self._locks: list[threading.Lock] = [locks[k] for k in sorted(locks)]
         self._batch.load_kernel()  # not at the first send, under every link's lock
 
-    def __len__(self) -> int:
-        return len(self._links)
-
     def send(self, packed: np.ndarray, crc_extra: int,
              only: Sequence[int] | None = None) -> dict[int, Exception]:
         """Send row ``i`` of ``packed`` (:func:`~gcs.link.encoder.packed_rows`) to link ``i``.
@@ -65,10 +62,10 @@ class Fanout:
             rows = sorted(set(only))
             if len(rows) != len(only) or (rows and not 0 <= rows[0] <= rows[-1] < n):
                 raise ValueError(f"only: rows must be distinct, in 0..{n - 1}: {list(only)}")
+        if not rows:
+            return failed
         whole = len(rows) == n
         batch = self._batch if whole else EncoderBatch([self._batch.encoder(i) for i in rows])
-        if not len(batch):
-            return failed
         for lock in self._locks:
             lock.acquire()
         try:

@@ -12,10 +12,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["HEADER_SIZE", "stamp_frames"]
+from gcs.link.unpack import HEADER_V2
 
-HEADER_SIZE = 10
-"""MAVLink 2 header with its start marker, bytes."""
+__all__ = ["stamp_frames"]
 
 
 @njit(cache=True)
@@ -40,10 +39,10 @@ def stamp_frames(packed: np.ndarray, seq: np.ndarray, sysid: np.ndarray, compid:
     n, size = packed.shape
     lengths = np.empty(n, np.int64)
     for i in range(n):
-        payload = size - HEADER_SIZE
-        while payload > 1 and packed[i, HEADER_SIZE + payload - 1] == 0:
+        payload = size - HEADER_V2
+        while payload > 1 and packed[i, HEADER_V2 + payload - 1] == 0:
             payload -= 1
-        end = HEADER_SIZE + payload
+        end = HEADER_V2 + payload
         out[i, 0] = packed[i, 0]
         out[i, 1] = payload
         out[i, 2] = 0
