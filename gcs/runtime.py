@@ -51,6 +51,7 @@ from gcs.recorder import TlogRecorder, team_header
 from gcs.safety import SafetyVerdict, evaluate
 from gcs.simtruth import SimTruth
 from gcs.stepgate import HOLD_CAP_S, StepGate
+from gcs.udi import finite_max_norm
 
 __all__ = ["Event", "Runtime", "RuntimeSnapshot", "TickStats"]
 
@@ -124,6 +125,9 @@ class Runtime:
             raise ValueError(f"no link configured for vehicle(s) {missing}")
         self.profiles = profiles
         self._profile_list = [profiles[vid] for vid in self.ids]
+        # one call per tick and vehicle only where the vertical channel is not z itself
+        self._vertical_calls = [(i, p.vertical_setpoint)
+                                for i, p in enumerate(self._profile_list) if not p.vertical_is_z]
         links = [p.link for p in self._profile_list]
         targets = np.array([(link.sysid, link.target_component) for link in links]).reshape(-1, 2)
         self._packer = SetpointPacker(
@@ -149,6 +153,7 @@ class Runtime:
         _ = fleet.located
         evaluate(team.config.safety, self.ids, fleet.age, fleet.p_ned, safe_radius=1.0)
         team.formation.distance_errors(fleet.p_ned[:, :2])
+        finite_max_norm(np.zeros((fleet.n, 2)))
         self.setpoints_per_tick = (team.config.guidance.setpoints_per_tick
                                    if setpoints_per_tick is None else setpoints_per_tick)
         if self.setpoints_per_tick < 1:
@@ -162,6 +167,7 @@ class Runtime:
         self._events: collections.deque[Event] = collections.deque(maxlen=200)
         self._active_warnings: set[tuple[str, int]] = set()
         self._modes: dict[int, str] = {}
+        self._modes_seen: tuple[str, ...] | None = None
         self.errors = 0
         """Error events so far (the event list keeps only the recent ones)."""
         self.gate = gate if gate is not None else StepGate(enabled=False)
@@ -411,14 +417,13 @@ class Runtime:
             phase = self.phase
         moving = phase is Phase.FORMATION and not verdict.freeze and op.guidance_on
         demand = op.demand if moving else MotionDemand(scale=op.demand.scale)
-        accel = np.zeros((fleet.n, 2))
         self._streamed = None
         if self._streams(phase):
-            accel = self._stream(fleet, demand, op)
+            accel, self._accel_last = self._stream(fleet, demand, op)
             self._streamed = accel
             self._advance(phase, op, now)
-        self._accel_last = math.sqrt(float(np.einsum("ij,ij->i", accel, accel).max())) \
-            if len(accel) else 0.0
+        else:
+            accel, self._accel_last = np.zeros((fleet.n, 2)), 0.0
         errors = self.team.formation.distance_errors(fleet.p_ned[:, :2], demand.scale)
         truth = self.truth_source() if self.truth_source is not None else None
         phase = self.phase  # after this tick's transitions: the recorder and the snapshot agree
@@ -462,17 +467,17 @@ class Runtime:
             self._set_phase(Phase.READY)
 
     def _stream(self, fleet: FleetState, demand: MotionDemand,
-                op: OperatorSnapshot) -> np.ndarray:
-        """Guidance and one setpoint per vehicle; errors are per vehicle."""
+                op: OperatorSnapshot) -> tuple[np.ndarray, float]:
+        """Guidance and one setpoint per vehicle (errors are per vehicle): the accelerations
+        sent and the largest one's norm."""
         if fleet.located:
             accel = self.guidance.accelerations(fleet.p_ned[:, :2], fleet.v_ned[:, :2],
                                                 fleet.yaw, demand)
-            if not np.isfinite(accel).all():
-                accel = np.nan_to_num(accel, nan=0.0, posinf=0.0, neginf=0.0)
+            largest = finite_max_norm(accel)  # what the guidance could not compute becomes 0
         else:  # cannot place every vehicle: hold still horizontally
-            accel = np.zeros((fleet.n, 2))
+            accel, largest = np.zeros((fleet.n, 2)), 0.0
         self._send_all(accel, z_ned=-op.altitude)
-        return accel
+        return accel, largest
 
     def _send_all(self, accel: np.ndarray, *, z_ned: float) -> None:
         """One setpoint per vehicle, packed for the whole fleet at once; an error is reported
@@ -480,27 +485,33 @@ class Runtime:
 
         ``accel`` is finite (:meth:`_stream` zeroes what the guidance could not compute).
         """
-        profiles = self._profile_list
-        vertical = np.empty(len(profiles))
-        refused: set[int] = set()
-        for i, profile in enumerate(profiles):
-            try:
-                vertical[i] = profile.vertical_setpoint(z_ned)
-            except Exception as exc:
-                vertical[i] = math.nan
-                refused.add(i)
-                self._not_sent(i, exc)
-        finite = np.isfinite(vertical)
+        vertical = np.full(len(self.ids), z_ned)
         only = None
-        if not finite.all():
-            only = np.flatnonzero(finite).tolist()
-            for i in np.flatnonzero(~finite).tolist():
-                if i not in refused:  # a refusal is reported above
-                    self._not_sent(i, f"vertical setpoint not finite: {vertical[i]}")
-            vertical = np.nan_to_num(vertical)
+        if self._vertical_calls:  # profiles whose vertical channel is not z itself
+            only = self._vertical_from_profiles(z_ned, vertical)
         packed = self._packer.pack(time.monotonic(), accel, vertical)
         for i, exc in self._fanout.send(packed, SETPOINT_MESSAGE.crc_extra, only).items():
             self._not_sent(i, exc)
+
+    def _vertical_from_profiles(self, z_ned: float, vertical: np.ndarray) -> list[int] | None:
+        """Fill in the vertical channel of the profiles that compute it; the rows that can
+        be sent (None: all), having reported why each other one cannot."""
+        refused = []
+        for i, vertical_setpoint in self._vertical_calls:
+            try:
+                value = float(vertical_setpoint(z_ned))
+            except Exception as exc:
+                refused.append(i)
+                self._not_sent(i, exc)
+                continue
+            if not math.isfinite(value):
+                refused.append(i)
+                self._not_sent(i, f"vertical setpoint not finite: {value}")
+            vertical[i] = value if math.isfinite(value) else 0.0
+        if not refused:
+            return None
+        vertical[refused] = 0.0
+        return sorted(set(range(len(vertical))) - set(refused))
 
     def _not_sent(self, i: int, why: Exception | str) -> None:
         """Warn once that vehicle ``i``'s setpoint was not sent, and why."""
@@ -540,6 +551,9 @@ class Runtime:
 
     def _report_modes(self, fleet: FleetState, phase: Phase) -> None:
         """A vehicle changing mode on its own while the GCS streams is a warning."""
+        if fleet.modes == self._modes_seen:  # one comparison on most ticks, not one per vehicle
+            return
+        self._modes_seen = fleet.modes
         for vid, mode in zip(fleet.ids, fleet.modes, strict=True):
             before = self._modes.get(vid)
             self._modes[vid] = mode

@@ -271,6 +271,42 @@ def test_the_loops_setpoint_packer_packs_as_packed_setpoints() -> None:
                 accel_xy_ned=accel, vertical=vertical, kind=kind))
 
 
+def test_encoders_shared_by_two_batches_keep_consecutive_sequence_numbers() -> None:
+    """A batch keeps its encoders' counters in one table; an encoder taken by another batch,
+    or encoding on its own meanwhile, goes on from where it was."""
+    position = v20.MAVLink_local_position_ned_message
+    encoders = [MavlinkEncoder(system_id=i + 1, component_id=1) for i in range(4)]
+    first, second = EncoderBatch(encoders[:3]), EncoderBatch(encoders[1:])
+    expected, count = [0] * 4, [0] * 4
+    rng = np.random.default_rng(7)
+
+    def packed(n: int) -> np.ndarray:
+        return packed_rows(position, n, {"x": rng.normal(size=n), "time_boot_ms": 1})
+
+    def check(frames: list[bytes], which: list[int]) -> None:
+        for frame, i in zip(frames, which, strict=True):
+            assert (frame[4], frame[5]) == (expected[i], i + 1), (which, i)
+            expected[i] = (expected[i] + 1) & 0xFF
+            count[i] += 1
+
+    for round_ in range(600):  # wraps every sequence number twice
+        step = round_ % 4
+        if step == 0:
+            check(first.stamp(packed(3), position.crc_extra), [0, 1, 2])
+        elif step == 1:
+            check(second.stamp(packed(3), position.crc_extra), [1, 2, 3])
+        elif step == 2:
+            rows = [0, 2]
+            data, width, lengths = first.stamp_buffer(packed(2), position.crc_extra, rows)
+            check([data[k * width:k * width + n] for k, n in enumerate(lengths)], rows)
+        else:
+            i = round_ % 3 + 1
+            check([encoders[i].encode(position(1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0))], [i])
+    assert [e.frames_sent for e in encoders] == count == [300, 350, 500, 200]
+    with pytest.raises(ValueError, match="appears twice"):
+        EncoderBatch([encoders[0], encoders[0]])
+
+
 def test_a_batch_drops_trailing_zeros_per_row_as_single_encoding_does() -> None:
     position = v20.MAVLink_local_position_ned_message
     rows = np.array([[5, 1.0, 2.0, -3.0, 0.0, 0.0, 0.0], [6, 1.0, 2.0, -3.0, 0.5, 0.0, 0.25],
@@ -279,7 +315,7 @@ def test_a_batch_drops_trailing_zeros_per_row_as_single_encoding_does() -> None:
     frames = EncoderBatch([gcs_encoder() for _ in range(3)]).stamp(packed, position.crc_extra)
     single = gcs_encoder()
     for frame, values in zip(frames, rows.tolist(), strict=True):
-        single._mav.seq = 0
+        single.seq = 0
         assert frame == single.encode(position(int(values[0]), *values[1:]))
     assert [f[1] for f in frames] == [16, 28, 1]  # payload lengths: zeros dropped, at least 1
     with pytest.raises(ValueError, match="3 packed frames for 2 encoders"):

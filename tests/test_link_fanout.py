@@ -144,4 +144,4 @@ def test_rows_left_out_are_not_numbered_and_a_closed_link_is_reported(
     for wrong in ([0, 0], [1, 3], [-1]):  # a caller's mistake, before anything is numbered
         with pytest.raises(ValueError, match=r"only: rows must be distinct, in 0\.\.2"):
             fanout.send(setpoints(3), SETPOINT_MESSAGE.crc_extra, only=wrong)
-    assert links[0]._encoder.mav.seq == 3
+    assert links[0]._encoder.seq == 3

@@ -9,13 +9,17 @@ a busy machine was enough to send the whole team into hold (seen in CI).
 from __future__ import annotations
 
 import contextlib
+import math
 import threading
 import time
 from collections import Counter
 from collections.abc import Iterator
 
+import pytest
+
 from gcs.app import GcsApp
 from gcs.config import load_team
+from gcs.link.profile_sim import SimProfile
 from gcs.link.setpoints import SETPOINT_MESSAGE
 from gcs.link.transport import FrameDirection
 from gcs.link.zenoh_session import ZenohSettings
@@ -99,6 +103,40 @@ def test_a_vehicle_whose_setpoint_cannot_be_sent_is_named_and_the_others_keep_th
         assert all(sent[vid] >= 8 for vid in (1, 2, 4)), sent  # 12 Hz for a second
         texts = [e.text for e in rt.events() if "setpoint not sent" in e.text]
         assert texts == ["vehicle 3: setpoint not sent: link is closed"], texts
+
+
+def test_a_vehicle_whose_vertical_channel_fails_is_named_and_the_others_keep_theirs(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Profiles that compute their vertical channel (ArduPilot's GCS-side altitude loop) are
+    asked per vehicle; one that raises or gives NaN costs only its own setpoint."""
+    failing: dict[int, str] = {}
+
+    def vertical_setpoint(self: SimProfile, z_ned: float) -> float:
+        how = failing.get(self.link.sysid)
+        if how == "raise":
+            raise ValueError("no fresh position")
+        return math.nan if how == "nan" else z_ned
+
+    monkeypatch.setattr(SimProfile, "vertical_is_z", False)
+    monkeypatch.setattr(SimProfile, "vertical_setpoint", vertical_setpoint)
+    with hovering() as app:
+        sent: Counter[int] = Counter()
+        for vid, link in app.links.links.items():
+            link.add_frame_listener(
+                lambda d, f, vid=vid: sent.update([vid]) if d is FrameDirection.OUT and
+                int.from_bytes(f[7:10], "little") == SETPOINT_MESSAGE.id else None)
+        failing.update({2: "raise", 3: "nan"})
+        time.sleep(0.3)  # a setpoint may have been on its way
+        sent.clear()
+        time.sleep(1.0)
+        assert sent[2] == sent[3] == 0, sent
+        assert sent[1] >= 8 and sent[4] >= 8, sent  # 12 Hz for a second
+        texts = [e.text for e in app.runtime.events() if "setpoint not sent" in e.text]
+        assert texts == ["vehicle 2: setpoint not sent: no fresh position",
+                         "vehicle 3: setpoint not sent: vertical setpoint not finite: nan"], texts
+        failing.clear()
+        time.sleep(0.5)
+        assert sent[2] >= 3 and sent[3] >= 3, sent
 
 
 def test_vehicles_in_offboard_get_setpoints_while_a_slow_one_is_still_switching() -> None:

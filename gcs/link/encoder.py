@@ -94,6 +94,24 @@ def _check_id(name: str, value: int) -> int:
     return value
 
 
+class _Counters:
+    """The sequence number and frame count of some encoders, one row (seq, sent) each.
+
+    Why a shared table: an :class:`EncoderBatch` numbers a whole fleet's frames in
+    one compiled pass, which reads and advances every encoder's counters at once
+    (two Python attribute updates per vehicle cost more than the pass itself).
+    An encoder's counters live in the table of the last batch that took it;
+    ``current`` turns False when some encoder leaves, and the batch takes its
+    encoders back before it numbers again.
+    """
+
+    __slots__ = ("current", "table")
+
+    def __init__(self, rows: int) -> None:
+        self.table = np.zeros((rows, 2), np.int64)
+        self.current = True
+
+
 class MavlinkEncoder:
     """Packs messages into MAVLink 2 frames; thread-safe.
 
@@ -115,8 +133,27 @@ class MavlinkEncoder:
             self._mav.signing.sign_outgoing = True
         self._wall_clock = wall_clock
         self._lock = threading.Lock()
-        self.frames_sent = 0
+        self._counters = _Counters(1)
+        self._row = 0
+
+    @property
+    def seq(self) -> int:
+        """Sequence number of the next frame (0..255)."""
+        return int(self._counters.table[self._row, 0])
+
+    @seq.setter
+    def seq(self, value: int) -> None:
+        self._counters.table[self._row, 0] = value & 0xFF
+
+    @property
+    def frames_sent(self) -> int:
         """Frames encoded so far."""
+        return int(self._counters.table[self._row, 1])
+
+    def _advance(self) -> None:
+        counters = self._counters.table[self._row]
+        counters[0] = (counters[0] + 1) & 0xFF
+        counters[1] += 1
 
     @property
     def mav(self) -> mavlink.MAVLink:
@@ -164,7 +201,7 @@ class MavlinkEncoder:
         with self._lock:
             signed = self._signed
             frame = (packed[:1] + bytes((len(packed) - _HEADER_SIZE, _IFLAG_SIGNED if signed else 0,
-                                         0, mav.seq, mav.srcSystem, mav.srcComponent))
+                                         0, self.seq, mav.srcSystem, mav.srcComponent))
                      + packed[7:])
             frame += _CRC.pack(frame_crc(frame[1:], crc_extra))
             if signed:
@@ -174,8 +211,7 @@ class MavlinkEncoder:
                 frame += _SIGNATURE_STAMP.pack(signing.link_id, signing.timestamp)[:7]
                 frame += signature(signing.secret_key, frame)
                 signing.timestamp += 1
-            mav.seq = (mav.seq + 1) & 0xFF
-            self.frames_sent += 1
+            self._advance()
         return frame
 
     def encode(self, msg: MavMessage) -> bytes:
@@ -186,9 +222,9 @@ class MavlinkEncoder:
                 # Signing timestamps must follow wall time and strictly increase.
                 mav.signing.timestamp = max(mav.signing.timestamp,
                                             signing_timestamp(self._wall_clock()))
+            mav.seq = self.seq  # pymavlink numbers the frame from it
             frame = msg.pack(mav)
-            mav.seq = (mav.seq + 1) & 0xFF
-            self.frames_sent += 1
+            self._advance()
         return frame
 
 
@@ -204,11 +240,24 @@ class EncoderBatch:
 
     def __init__(self, encoders: Sequence[MavlinkEncoder]) -> None:
         self._encoders = tuple(encoders)
-        self._mavs = [e._mav for e in self._encoders]
-        self._sysid = np.array([m.srcSystem for m in self._mavs], np.uint8)
-        self._compid = np.array([m.srcComponent for m in self._mavs], np.uint8)
-        self._signed = [i for i, e in enumerate(self._encoders) if e.signed]
-        self._plain = [i for i, e in enumerate(self._encoders) if not e.signed]
+        if len({id(e) for e in self._encoders}) != len(self._encoders):
+            raise ValueError("an encoder appears twice in the batch")
+        mavs = [e._mav for e in self._encoders]
+        self._sysid = np.array([m.srcSystem for m in mavs], np.uint8)
+        self._compid = np.array([m.srcComponent for m in mavs], np.uint8)
+        self._signed = np.array([e.signed for e in self._encoders], np.bool_)
+        self._any_signed = bool(self._signed.any())
+        self._all = np.arange(len(self._encoders))
+        self._counters = self._take()
+
+    def _take(self) -> _Counters:
+        """Move every encoder's counters into a new table of this batch (see :class:`_Counters`)."""
+        counters = _Counters(len(self._encoders))
+        for i, e in enumerate(self._encoders):
+            counters.table[i] = e._counters.table[e._row]
+            e._counters.current = False  # its batch, if any, takes its encoders back first
+            e._counters, e._row = counters, i
+        return counters
 
     def encoder(self, i: int) -> MavlinkEncoder:
         """The encoder of row ``i``."""
@@ -217,34 +266,37 @@ class EncoderBatch:
     def load_kernel(self) -> None:
         """Compile or load the stamping kernel now (up to a second the first time), so the
         first :meth:`stamp` does not wait for it."""
-        rows = np.zeros((1, _HEADER_SIZE + 1), np.uint8)
+        packed = np.zeros((1, _HEADER_SIZE + 1), np.uint8)
         one = np.zeros(1, np.uint8)
-        stamp_frames(rows, one, one, one, 0, np.empty((1, _HEADER_SIZE + 3), np.uint8))
+        stamp_frames(packed, np.zeros(1, np.int64), np.zeros((1, 2), np.int64), one, one,
+                     np.zeros(1, np.bool_), 0, np.empty((1, _HEADER_SIZE + 3), np.uint8))
 
     def stamp(self, packed: np.ndarray, crc_extra: int) -> list[bytes]:
         """Row ``i`` of ``packed`` (:func:`packed_rows`) as encoder ``i``'s next frame."""
         data, width, lengths = self.stamp_buffer(packed, crc_extra)
         return [data[k * width:k * width + size] for k, size in enumerate(lengths)]
 
-    def stamp_buffer(self, packed: np.ndarray, crc_extra: int) -> tuple[bytes, int, list[int]]:
-        """:meth:`stamp` as one buffer: frame ``i`` is ``data[i * width:][:lengths[i]]``.
+    def stamp_buffer(self, packed: np.ndarray, crc_extra: int,
+                     rows: Sequence[int] | None = None) -> tuple[bytes, int, list[int]]:
+        """:meth:`stamp` as one buffer: frame ``k`` is ``data[k * width:][:lengths[k]]``.
 
-        Why: the caller slices each frame as it sends it, one loop over the fleet.
+        ``rows``: the encoders (distinct, in range) that row ``k`` of ``packed``
+        goes to (default: all, in order). Why one buffer: the caller slices each
+        frame as it sends it, one loop over the fleet.
         """
-        n = len(self._encoders)
-        if packed.shape[0] != n:
-            raise ValueError(f"{packed.shape[0]} packed frames for {n} encoders")
-        mavs = self._mavs
-        seq = np.array([m.seq for m in mavs], np.uint8)
+        which = self._all if rows is None else np.asarray(rows, np.int64)
+        if packed.shape[0] != len(which):
+            raise ValueError(f"{packed.shape[0]} packed frames for {len(which)} encoders")
+        if not self._counters.current:  # another batch took some encoder meanwhile
+            self._counters = self._take()
         # room for a signature where some encoder signs: its frame is put in its row below
-        width = packed.shape[1] + 2 + (_SIGNATURE_SIZE if self._signed else 0)
-        out = np.empty((n, width), np.uint8)
-        lengths = stamp_frames(packed, seq, self._sysid, self._compid, crc_extra, out).tolist()
-        for i in self._plain:
-            mavs[i].seq = (mavs[i].seq + 1) & 0xFF
-            self._encoders[i].frames_sent += 1
-        for i in self._signed:  # numbered (from seq[i]) and signed one by one by restamp
-            frame = self._encoders[i].restamp(packed[i].tobytes(), crc_extra)
-            out[i, :len(frame)] = np.frombuffer(frame, np.uint8)
-            lengths[i] = len(frame)
+        width = packed.shape[1] + 2 + (_SIGNATURE_SIZE if self._any_signed else 0)
+        out = np.empty((len(which), width), np.uint8)
+        lengths = stamp_frames(packed, which, self._counters.table, self._sysid, self._compid,
+                               self._signed, crc_extra, out).tolist()
+        if self._any_signed:  # numbered and signed one by one by restamp
+            for k in np.flatnonzero(self._signed[which]).tolist():
+                frame = self._encoders[which[k]].restamp(packed[k].tobytes(), crc_extra)
+                out[k, :len(frame)] = np.frombuffer(frame, np.uint8)
+                lengths[k] = len(frame)
         return out.tobytes(), width, lengths

@@ -65,24 +65,29 @@ class Fanout:
         if not rows:
             return failed
         whole = len(rows) == n
-        batch = self._batch if whole else EncoderBatch([self._batch.encoder(i) for i in rows])
         for lock in self._locks:
             lock.acquire()
         try:
-            data, width, lengths = batch.stamp_buffer(packed if whole else packed[rows],
-                                                      crc_extra)
-            for k, i in enumerate(rows):
-                if self._stops[i].is_set():  # numbered, never sent: closed for good
+            data, width, lengths = self._batch.stamp_buffer(
+                packed, crc_extra) if whole else self._batch.stamp_buffer(
+                packed[list(rows)], crc_extra, rows)
+            # locals and one zip: a hundred rounds of this loop are a tenth of the tick
+            sends, stops, listeners = self._sends, self._stops, self._listeners
+            start = 0
+            for i, size in zip(rows, lengths, strict=True):
+                frame = data[start:start + size]
+                start += width
+                if stops[i].is_set():  # numbered, never sent: closed for good
                     failed[i] = LinkError(self._links[i].sysid, "link is closed")
                     continue
-                frame = data[k * width:k * width + lengths[k]]
                 try:
-                    self._sends[i](frame)
+                    sends[i](frame)
                 except Exception as exc:
                     failed[i] = exc
                     continue
-                for listener in self._listeners[i]:
-                    self._links[i]._call(listener, FrameDirection.OUT, frame)
+                if listeners[i]:
+                    for listener in listeners[i]:
+                        self._links[i]._call(listener, FrameDirection.OUT, frame)
         finally:
             for lock in reversed(self._locks):
                 lock.release()

@@ -88,13 +88,20 @@ class AutopilotProfile(Protocol):
         """
         ...
 
+    @property
+    def vertical_is_z(self) -> bool:
+        """Whether :meth:`vertical_setpoint` is ``z_ned`` itself and does nothing else: the
+        loop then fills it in for the whole fleet, without a call per vehicle."""
+        ...
+
     def vertical_setpoint(self, z_ned: float) -> float:
         """The vertical channel (:attr:`setpoint_kind`) of the next setpoint for target ``z_ned``.
 
         z itself (m, down) for x/y acceleration with z position; the down
         acceleration (m/s^2) of the profile's own altitude loop for acceleration
-        only. Called once per setpoint sent: the loop packs a whole fleet's
-        setpoints at once and sends them with :class:`~gcs.link.fanout.Fanout`.
+        only. Called once per setpoint sent (unless :attr:`vertical_is_z`): the
+        loop packs a whole fleet's setpoints at once and sends them with
+        :class:`~gcs.link.fanout.Fanout`.
         """
         ...
 
@@ -112,6 +119,9 @@ class ProfileBase:
 
     expected_autopilots: frozenset[int] = frozenset()
     """``MAV_AUTOPILOT`` values this profile can drive."""
+
+    vertical_is_z: bool = False
+    """See :attr:`AutopilotProfile.vertical_is_z`."""
 
     def __init__(self, link: Link, *, confirm_timeout_s: float = 3.0) -> None:
         self._link = link

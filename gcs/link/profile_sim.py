@@ -26,6 +26,7 @@ class SimProfile(ProfileBase):
     expected_autopilots = frozenset({mavlink.MAV_AUTOPILOT_GENERIC})
     streaming_mode = SimMode.OFFBOARD.name
     landing_modes = frozenset({SimMode.LAND.name})
+    vertical_is_z = True
 
     @property
     def name(self) -> ProfileName:

@@ -25,39 +25,49 @@ def _crc_accumulate(byte: int, crc: int) -> int:
 
 
 @njit(cache=True)
-def stamp_frames(packed: np.ndarray, seq: np.ndarray, sysid: np.ndarray, compid: np.ndarray,
-                 crc_extra: int, out: np.ndarray) -> np.ndarray:
-    """Finish each row of ``packed`` into a frame in the same row of ``out``; their lengths.
+def stamp_frames(packed: np.ndarray, rows: np.ndarray, counters: np.ndarray, sysid: np.ndarray,
+                 compid: np.ndarray, signed: np.ndarray, crc_extra: int,
+                 out: np.ndarray) -> np.ndarray:
+    """Finish row ``k`` of ``packed`` into a frame of sender ``rows[k]`` in row ``k`` of
+    ``out``; the frame lengths.
 
-    ``packed`` (n, size) uint8: a MAVLink 2 header (marker and message id set)
+    ``packed`` (m, size) uint8: a MAVLink 2 header (marker and message id set)
     and the full payload, as :func:`gcs.link.encoder.packed_rows` builds.
-    Per row: the payload's trailing zeros dropped (MAVLink 2), length,
-    sequence ``seq[i]`` and sender ``sysid[i]``/``compid[i]`` written, no
-    incompatibility flags (unsigned), checksum with ``crc_extra`` appended.
-    ``out`` is (n, size + 2 or more) uint8; returns the frame length of each row.
+    Senders ``i`` are rows of ``counters`` (n, 2) int64 (sequence number, frames
+    sent), ``sysid`` and ``compid`` (n,) uint8 and ``signed`` (n,) bool. Per
+    frame: the payload's trailing zeros dropped (MAVLink 2), length, sender's
+    sequence number and ids written, no incompatibility flags, checksum with
+    ``crc_extra`` appended; the sender's counters advance. Rows of signed
+    senders are left alone (length 0): the caller signs those one by one.
+    ``out`` is (m, size + 2 or more) uint8.
     """
-    n, size = packed.shape
-    lengths = np.empty(n, np.int64)
-    for i in range(n):
+    m, size = packed.shape
+    lengths = np.zeros(m, np.int64)
+    for k in range(m):
+        i = rows[k]
+        if signed[i]:
+            continue
         payload = size - HEADER_V2
-        while payload > 1 and packed[i, HEADER_V2 + payload - 1] == 0:
+        while payload > 1 and packed[k, HEADER_V2 + payload - 1] == 0:
             payload -= 1
         end = HEADER_V2 + payload
-        out[i, 0] = packed[i, 0]
-        out[i, 1] = payload
-        out[i, 2] = 0
-        out[i, 3] = 0
-        out[i, 4] = seq[i]
-        out[i, 5] = sysid[i]
-        out[i, 6] = compid[i]
+        out[k, 0] = packed[k, 0]
+        out[k, 1] = payload
+        out[k, 2] = 0
+        out[k, 3] = 0
+        out[k, 4] = counters[i, 0]
+        out[k, 5] = sysid[i]
+        out[k, 6] = compid[i]
         crc = 0xFFFF
-        for k in range(1, 7):
-            crc = _crc_accumulate(out[i, k], crc)
-        for k in range(7, end):
-            out[i, k] = packed[i, k]
-            crc = _crc_accumulate(packed[i, k], crc)
+        for j in range(1, 7):
+            crc = _crc_accumulate(out[k, j], crc)
+        for j in range(7, end):
+            out[k, j] = packed[k, j]
+            crc = _crc_accumulate(packed[k, j], crc)
         crc = _crc_accumulate(crc_extra, crc)
-        out[i, end] = crc & 0xFF
-        out[i, end + 1] = crc >> 8
-        lengths[i] = end + 2
+        out[k, end] = crc & 0xFF
+        out[k, end + 1] = crc >> 8
+        lengths[k] = end + 2
+        counters[i, 0] = (counters[i, 0] + 1) & 0xFF
+        counters[i, 1] += 1
     return lengths
