@@ -4,9 +4,10 @@ Why: sent link by link (each frame numbered and checksummed by its link's
 encoder, :meth:`~gcs.link.encoder.MavlinkEncoder.restamp`), a hundred
 setpoints cost the loop about 1.7 ms, three quarters of it Python around the
 zenoh publications; numbered and checksummed in one compiled pass
-(:class:`~gcs.link.encoder.EncoderBatch`) and published in one loop, 0.5-0.7 ms
-(bench/gcs_tick.py). The frames are the ones each link would send on its own:
-same sequence numbers, signatures, frame listeners (the recorder) and errors.
+(:class:`~gcs.link.encoder.EncoderBatch`) and published in one loop, 0.45-0.6 ms,
+of which the hundred zenoh publications are 0.3 ms (bench/gcs_tick.py). The
+frames are the ones each link would send on its own: same sequence numbers,
+signatures, frame listeners (the recorder) and errors.
 """
 
 from __future__ import annotations
