@@ -213,8 +213,9 @@ class Guidance:
         """Unsaturated acceleration (n, 2) in each vehicle's frame.
 
         :func:`formation_acceleration` on arrays already in the kernel's layout
-        (measurements from :func:`relative_measurements`, cached coefficients):
-        the tick skips ten layout checks of a few microseconds each.
+        (cached coefficients; ``meas`` as :func:`relative_measurements` gives it:
+        float64, C order): the tick skips ten layout checks of a few
+        microseconds each.
         """
         alpha_v, alpha_a, d = self.coefficients(demand)
         return udi(meas.v_own, meas.rel_p, meas.rel_v, self._mask, d, alpha_v, alpha_a,

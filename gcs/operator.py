@@ -13,6 +13,7 @@ Thread-safe: sources write from their own threads, the loop takes a
 
 from __future__ import annotations
 
+import math
 import threading
 from dataclasses import dataclass
 
@@ -106,6 +107,8 @@ class OperatorCommand:
         """Altitude target above the ground, m; followed at ``rate`` m/s (default: config)."""
         if not np.isfinite(altitude):
             raise ValueError(f"operator altitude is not a number: {altitude}")
+        if rate is not None and not rate > 0.0:  # NaN included: it would skip the ramp
+            raise ValueError(f"operator altitude rate must be positive, got {rate}")
         with self._lock:
             self._advance(now)
             self._alt_target = float(np.clip(altitude, self._cfg.altitude_min,
@@ -122,6 +125,8 @@ class OperatorCommand:
 
     def reset_altitude(self, altitude: float, *, now: float) -> None:
         """Jump both target and ramp to ``altitude`` (e.g. after take-off)."""
+        if not math.isfinite(altitude):
+            raise ValueError(f"operator altitude is not a number: {altitude}")
         with self._lock:
             self._alt = self._alt_target = float(altitude)
             self._alt_time = now

@@ -485,6 +485,10 @@ class Runtime:
 
         ``accel`` is finite (:meth:`_stream` zeroes what the guidance could not compute).
         """
+        if not math.isfinite(z_ned):  # never reaches a vehicle, whatever its profile
+            for i in range(len(self.ids)):
+                self._not_sent(i, f"altitude target not finite: {z_ned}")
+            return
         vertical = np.full(len(self.ids), z_ned)
         only = None
         if self._vertical_calls:  # profiles whose vertical channel is not z itself

@@ -7,6 +7,7 @@ import pytest
 
 from gcs.config import load_team
 from gcs.guidance import Guidance, MotionDemand
+from gcs.udi import finite_max_norm
 from tests.double_integrator import fly
 
 TEAMS = ["configs/bebop_square.yaml", "configs/bebop_triangle.yaml",
@@ -149,3 +150,15 @@ def test_kept_coefficients_follow_every_change_of_demand(guidance: Guidance) -> 
                          hold_compensation=g.lead > 0)
         assert guidance.accelerations(p[:, :2], v[:, :2], yaw, demand) == pytest.approx(
             fresh.accelerations(p[:, :2], v[:, :2], yaw, demand), abs=1e-12)
+
+
+def test_a_non_finite_command_becomes_zero_and_the_largest_norm_is_of_what_is_left() -> None:
+    """What the loop sends and the safety bound it checks (gcs.runtime)."""
+    accel = np.array([[3.0, 4.0], [np.nan, 1.0], [np.inf, -np.inf], [0.6, -0.8]])
+    assert finite_max_norm(accel) == pytest.approx(5.0)
+    assert np.array_equal(accel, [[3.0, 4.0], [0.0, 1.0], [0.0, 0.0], [0.6, -0.8]])
+    assert finite_max_norm(np.zeros((0, 2))) == 0.0
+    rng = np.random.default_rng(2)
+    for _ in range(50):
+        a = rng.normal(0, 2, (7, 2))
+        assert finite_max_norm(a.copy()) == pytest.approx(np.linalg.norm(a, axis=1).max())

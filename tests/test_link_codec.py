@@ -275,7 +275,9 @@ def test_encoders_shared_by_two_batches_keep_consecutive_sequence_numbers() -> N
     """A batch keeps its encoders' counters in one table; an encoder taken by another batch,
     or encoding on its own meanwhile, goes on from where it was."""
     position = v20.MAVLink_local_position_ned_message
-    encoders = [MavlinkEncoder(system_id=i + 1, component_id=1) for i in range(4)]
+    key = SigningKey(bytes(range(5, 37)))
+    encoders = [MavlinkEncoder(system_id=i + 1, component_id=1, signing_key=key if i == 2 else None,
+                               wall_clock=lambda: 1.7e9) for i in range(4)]
     first, second = EncoderBatch(encoders[:3]), EncoderBatch(encoders[1:])
     expected, count = [0] * 4, [0] * 4
     rng = np.random.default_rng(7)
@@ -286,6 +288,7 @@ def test_encoders_shared_by_two_batches_keep_consecutive_sequence_numbers() -> N
     def check(frames: list[bytes], which: list[int]) -> None:
         for frame, i in zip(frames, which, strict=True):
             assert (frame[4], frame[5]) == (expected[i], i + 1), (which, i)
+            assert frame[2] == (v20.MAVLINK_IFLAG_SIGNED if i == 2 else 0)  # vehicle 3 signs
             expected[i] = (expected[i] + 1) & 0xFF
             count[i] += 1
 
@@ -305,6 +308,10 @@ def test_encoders_shared_by_two_batches_keep_consecutive_sequence_numbers() -> N
     assert [e.frames_sent for e in encoders] == count == [300, 350, 500, 200]
     with pytest.raises(ValueError, match="appears twice"):
         EncoderBatch([encoders[0], encoders[0]])
+    for wrong in ([3], [-1], [1, 1]):  # the kernel has no bounds checks: refused before it
+        with pytest.raises(ValueError, match=r"rows must be distinct encoders in 0\.\.2"):
+            first.stamp_buffer(packed(len(wrong)), position.crc_extra, wrong)
+    assert [e.frames_sent for e in encoders] == count  # nothing numbered by the refusals
 
 
 def test_a_batch_drops_trailing_zeros_per_row_as_single_encoding_does() -> None:

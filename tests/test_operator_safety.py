@@ -49,6 +49,12 @@ def test_altitude_is_rate_limited() -> None:
     assert op.set_altitude(9.0, now=10.0) == pytest.approx(3.0)  # clipped to the ceiling
     op.step_altitude(-2, now=10.0)
     assert op.snapshot(20.0).altitude == pytest.approx(2.5)
+    for rate in (float("nan"), 0.0, -1.0):  # NaN would skip the ramp: a jump, not a climb
+        with pytest.raises(ValueError, match="altitude rate must be positive"):
+            op.set_altitude(2.0, now=20.0, rate=rate)
+    with pytest.raises(ValueError, match="altitude is not a number"):
+        op.reset_altitude(float("inf"), now=20.0)
+    assert op.snapshot(21.0).altitude_target == pytest.approx(2.5)  # untouched by the refusals
 
 
 def test_guidance_off_zeroes_motion() -> None:

@@ -15,6 +15,7 @@ import time
 from collections import Counter
 from collections.abc import Iterator
 
+import numpy as np
 import pytest
 
 from gcs.app import GcsApp
@@ -137,6 +138,12 @@ def test_a_vehicle_whose_vertical_channel_fails_is_named_and_the_others_keep_the
         failing.clear()
         time.sleep(0.5)
         assert sent[2] >= 3 and sent[3] >= 3, sent
+        # A non-finite altitude target reaches no vehicle, whatever its vertical channel
+        # (2 and 3 are not named again: their warning above stands, one per vehicle).
+        app.runtime._send_all(np.zeros((4, 2)), z_ned=math.nan)
+        texts = [e.text for e in app.runtime.events() if "altitude target" in e.text]
+        assert texts == ["vehicle 1: setpoint not sent: altitude target not finite: nan",
+                         "vehicle 4: setpoint not sent: altitude target not finite: nan"], texts
 
 
 def test_vehicles_in_offboard_get_setpoints_while_a_slow_one_is_still_switching() -> None:

@@ -133,25 +133,31 @@ class MavlinkEncoder:
             self._mav.signing.sign_outgoing = True
         self._wall_clock = wall_clock
         self._lock = threading.Lock()
-        self._counters = _Counters(1)
-        self._row = 0
+        # (table, row) of this encoder's counters, replaced as one attribute when a batch
+        # takes them, so no reader ever pairs one table with another's row
+        self._slot: tuple[_Counters, int] = (_Counters(1), 0)
+
+    def _counter_row(self) -> np.ndarray:
+        counters, row = self._slot
+        return counters.table[row]
 
     @property
     def seq(self) -> int:
         """Sequence number of the next frame (0..255)."""
-        return int(self._counters.table[self._row, 0])
+        return int(self._counter_row()[0])
 
     @seq.setter
     def seq(self, value: int) -> None:
-        self._counters.table[self._row, 0] = value & 0xFF
+        with self._lock:
+            self._counter_row()[0] = value & 0xFF
 
     @property
     def frames_sent(self) -> int:
         """Frames encoded so far."""
-        return int(self._counters.table[self._row, 1])
+        return int(self._counter_row()[1])
 
     def _advance(self) -> None:
-        counters = self._counters.table[self._row]
+        counters = self._counter_row()
         counters[0] = (counters[0] + 1) & 0xFF
         counters[1] += 1
 
@@ -234,8 +240,9 @@ class EncoderBatch:
     :meth:`stamp` gives every encoder its next frame from one row of packed
     frames, as :meth:`MavlinkEncoder.restamp` does, in one compiled pass
     (:func:`gcs.link.stamp.stamp_frames`) for the unsigned ones. Not locked:
-    the caller serializes each encoder's frames (:class:`gcs.link.Link`'s send
-    lock), since a numbered frame must leave before the next is numbered.
+    the caller serializes each encoder's frames, and the batch's construction,
+    with them (:class:`gcs.link.Link`'s send lock), since a numbered frame must
+    leave before the next is numbered.
     """
 
     def __init__(self, encoders: Sequence[MavlinkEncoder]) -> None:
@@ -247,16 +254,19 @@ class EncoderBatch:
         self._compid = np.array([m.srcComponent for m in mavs], np.uint8)
         self._signed = np.array([e.signed for e in self._encoders], np.bool_)
         self._any_signed = bool(self._signed.any())
-        self._all = np.arange(len(self._encoders))
+        self._all = np.arange(len(self._encoders), dtype=np.int64)
         self._counters = self._take()
 
     def _take(self) -> _Counters:
-        """Move every encoder's counters into a new table of this batch (see :class:`_Counters`)."""
+        """Move every encoder's counters into a new table of this batch (see :class:`_Counters`),
+        each under its encoder's lock so no frame is numbered meanwhile."""
         counters = _Counters(len(self._encoders))
         for i, e in enumerate(self._encoders):
-            counters.table[i] = e._counters.table[e._row]
-            e._counters.current = False  # its batch, if any, takes its encoders back first
-            e._counters, e._row = counters, i
+            with e._lock:
+                old, row = e._slot
+                counters.table[i] = old.table[row]
+                old.current = False  # its batch, if any, takes its encoders back first
+                e._slot = (counters, i)
         return counters
 
     def encoder(self, i: int) -> MavlinkEncoder:
@@ -284,9 +294,14 @@ class EncoderBatch:
         goes to (default: all, in order). Why one buffer: the caller slices each
         frame as it sends it, one loop over the fleet.
         """
-        which = self._all if rows is None else np.asarray(rows, np.int64)
+        n = len(self._encoders)
+        which = self._all if rows is None else np.asarray(rows, np.int64).reshape(-1)
         if packed.shape[0] != len(which):
             raise ValueError(f"{packed.shape[0]} packed frames for {len(which)} encoders")
+        # the kernel does not check bounds: a wrong row would write another's counters
+        if rows is not None and len(which) and not (which.min() >= 0 and which.max() < n
+                                                    and len(np.unique(which)) == len(which)):
+            raise ValueError(f"rows must be distinct encoders in 0..{n - 1}: {which.tolist()}")
         if not self._counters.current:  # another batch took some encoder meanwhile
             self._counters = self._take()
         # room for a signature where some encoder signs: its frame is put in its row below

@@ -12,6 +12,7 @@ signatures, frame listeners (the recorder) and errors.
 
 from __future__ import annotations
 
+import contextlib
 import threading
 from collections.abc import Sequence
 
@@ -36,13 +37,16 @@ class Fanout:
 
     def __init__(self, links: Sequence[Link]) -> None:
         self._links = tuple(links)
-        self._batch = EncoderBatch([link._encoder for link in self._links])
         self._sends = [link._transport.send for link in self._links]
         self._listeners = [link._frame_listeners for link in self._links]  # live lists
         self._stops = [link._stop for link in self._links]
         # Taken in one global order, so two fanouts over overlapping links cannot deadlock.
         locks = {id(link._send_lock): link._send_lock for link in self._links}
         self._locks: list[threading.Lock] = [locks[k] for k in sorted(locks)]
+        with contextlib.ExitStack() as held:  # the batch takes the encoders' counters
+            for lock in self._locks:
+                held.enter_context(lock)
+            self._batch = EncoderBatch([link._encoder for link in self._links])
         self._batch.load_kernel()  # not at the first send, under every link's lock
 
     def send(self, packed: np.ndarray, crc_extra: int,
