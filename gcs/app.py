@@ -36,10 +36,16 @@ from gcs.operator import OperatorCommand
 from gcs.recorder import TlogRecorder
 from gcs.runtime import Runtime, RuntimeSnapshot
 from gcs.simtruth import SimTruth
-from gcs.stepgate import StepGate
+from gcs.stepgate import HOLD_CAP_S, StepGate
 
 __all__ = ["GcsApp"]
 
+
+SIM_CLOCK_TIMEOUT_S = HOLD_CAP_S + 5.0
+"""Wall time without the simulator clock advancing after which the loop stops, s: longer
+than a lockstep window may hold the sim (``HOLD_CAP_S``), so a phase action that keeps a
+window open to its cap (commands to a dead vehicle, retried in wall time) does not read
+as a dead simulator."""
 
 ECHO_WAIT = 0.2
 """Longest wall time a lockstep ack waits for the vehicles' setpoint echoes, s."""
@@ -133,7 +139,7 @@ class GcsApp:
         self._ack: zenoh.Publisher | None = None
         self._last_ack: bytes | None = None
         if sim_clock:
-            ext = ExternalClock(timeout=10.0)
+            ext = ExternalClock(timeout=SIM_CLOCK_TIMEOUT_S)
             self._subs.append(self.session.declare_subscriber(keys.clock(self.fleet),
                                                               self._on_clock))
             self.clock = ext

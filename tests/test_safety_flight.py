@@ -13,6 +13,7 @@ from collections.abc import Iterator
 import pytest
 
 from gcs.app import GcsApp
+from gcs.clock import ClockStoppedError
 from gcs.config import load_team
 from gcs.link import keys
 from gcs.link.modes import SimMode
@@ -44,11 +45,21 @@ def break_vehicle(app: GcsApp, action: str, sysid: int) -> None:
                     f'{{"action": "{action}", "sysid": {sysid}}}'.encode())
 
 
+def sim_sleep(app: GcsApp, seconds: float) -> None:
+    """Wait ``seconds`` of sim time; if the sim clock stops, fail with the loop's latest
+    events (what the GCS was doing is the clue to why the lockstep stood still)."""
+    try:
+        app.clock.sleep_until(app.clock.now() + seconds)
+    except ClockStoppedError as exc:
+        events = "\n".join(f"  {e.level}: {e.text}" for e in app.runtime.events()[-15:])
+        raise AssertionError(f"{exc}; the GCS's latest events:\n{events}") from exc
+
+
 def hold_sticks(app: GcsApp, seconds: float) -> None:
     end = app.clock.now() + seconds
     while app.clock.now() < end:
         app.operator.set_sticks(0.6, 0.0, 0.0, now=app.clock.now(), source="test")
-        app.clock.sleep_until(app.clock.now() + 0.25)
+        sim_sleep(app, 0.25)
 
 
 def test_cut_link_freezes_the_motion_then_lands_the_team(flying: GcsApp) -> None:
@@ -84,7 +95,7 @@ def test_killed_vehicle_is_reported_gone_and_the_team_lands(flying: GcsApp) -> N
     while not gone():
         time.sleep(0.05)
         assert time.monotonic() - killed_at < 1.0, "killed vehicle not reported within 1 s"
-    app.clock.sleep_until(app.clock.now() + TEAM.config.safety.land_after + 1.5)
+    sim_sleep(app, TEAM.config.safety.land_after + 1.5)
     assert app.runtime.phase in (Phase.ABORTING, Phase.LANDING, Phase.LANDED)
     texts = [e.text for e in app.runtime.events()]
     assert any("vehicle 2" in t and "landing the team" in t for t in texts)
@@ -95,9 +106,9 @@ def test_abort_holds_then_lands(flying: GcsApp) -> None:
     hold_sticks(app, 1.0)
     app.runtime.request(Action.ABORT)
     assert app.runtime.phase is Phase.ABORTING
-    app.clock.sleep_until(app.clock.now() + 0.5)
+    sim_sleep(app, 0.5)
     assert app.runtime.snapshot.demand.forward == 0.0
-    app.clock.sleep_until(app.clock.now() + TEAM.config.flight.abort_hold + 1.0)
+    sim_sleep(app, TEAM.config.flight.abort_hold + 1.0)
     assert app.runtime.phase in (Phase.LANDING, Phase.LANDED)
 
 
