@@ -47,8 +47,11 @@ than a lockstep window may hold the sim (``HOLD_CAP_S``), so a phase action that
 window open to its cap (commands to a dead vehicle, retried in wall time) does not read
 as a dead simulator."""
 
-ECHO_WAIT = 0.2
-"""Longest wall time a lockstep ack waits for the vehicles' setpoint echoes, s."""
+ECHO_WAIT = 1.0
+"""Longest wall time a lockstep ack waits for a vehicle's setpoint echoes, s. Long, so that
+a loaded or briefly frozen machine (stalls of 0.2 s were seen on the development VM) still
+acks only once the sim has the setpoints; only vehicles heard from since the last ack are
+waited for, so a dead or cut-off vehicle costs nothing (:class:`_EchoCounter`)."""
 
 
 class _EchoCounter:
@@ -58,6 +61,7 @@ class _EchoCounter:
         self._cond = threading.Condition()
         self._sent: dict[int, int] = {}
         self._echoed: dict[int, int] = {}
+        self._heard: set[int] = set()  # vehicles that sent anything since the last wait
         for link in links:
             sysid = link.sysid
             self._sent[sysid] = self._echoed[sysid] = 0
@@ -70,16 +74,29 @@ class _EchoCounter:
                 self._sent[sysid] += 1
 
     def _on_message(self, sysid: int, msg: MavMessage) -> None:
-        if msg.get_type() == "POSITION_TARGET_LOCAL_NED":
-            with self._cond:
+        with self._cond:
+            self._heard.add(sysid)
+            if msg.get_type() == "POSITION_TARGET_LOCAL_NED":
                 self._echoed[sysid] += 1
                 self._cond.notify_all()
 
     def wait(self, timeout: float) -> bool:
-        """Block until every sent setpoint was echoed (True) or ``timeout`` passed."""
+        """Block until every vehicle heard from since the last wait has echoed every setpoint
+        sent to it (True), or ``timeout`` passed.
+
+        A lockstep vehicle sends telemetry every sim period, so one not heard from
+        is dead or cut off: it is not waited for. Echoes still missing when this
+        returns are written off, so a vehicle that comes back, or that refused a
+        setpoint (no echo), is counted afresh from then on.
+        """
         with self._cond:
-            return self._cond.wait_for(
-                lambda: all(self._echoed[s] >= n for s, n in self._sent.items()), timeout)
+            waited = [s for s in self._sent if s in self._heard]
+            done = self._cond.wait_for(
+                lambda: all(self._echoed[s] >= self._sent[s] for s in waited), timeout)
+            for s in self._sent:
+                self._echoed[s] = max(self._echoed[s], self._sent[s])
+            self._heard.clear()
+            return done
 
 
 _SETPOINT_ID = mavlink.MAVLINK_MSG_ID_SET_POSITION_TARGET_LOCAL_NED
@@ -208,8 +225,8 @@ class GcsApp:
 
         Zenoh delivers different keys on different callback threads, so an ack
         could overtake the setpoints it follows; the vehicles' echoes of the
-        setpoints (POSITION_TARGET_LOCAL_NED) prove they arrived. An echo lost on
-        the way costs at most ``ECHO_WAIT`` of wall time, never a stall.
+        setpoints (POSITION_TARGET_LOCAL_NED) prove they arrived. A missing echo costs
+        at most ``ECHO_WAIT`` of wall time, never a stall.
         """
         assert self._ack is not None
         self._echo.wait(ECHO_WAIT)
