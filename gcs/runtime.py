@@ -511,10 +511,11 @@ class Runtime:
             if not math.isfinite(value):
                 refused.append(i)
                 self._not_sent(i, f"vertical setpoint not finite: {value}")
-            vertical[i] = value if math.isfinite(value) else 0.0
+                continue
+            vertical[i] = value
         if not refused:
             return None
-        vertical[refused] = 0.0
+        vertical[refused] = 0.0  # packed, never sent
         return sorted(set(range(len(vertical))) - set(refused))
 
     def _not_sent(self, i: int, why: Exception | str) -> None:

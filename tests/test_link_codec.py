@@ -309,7 +309,7 @@ def test_encoders_shared_by_two_batches_keep_consecutive_sequence_numbers() -> N
     with pytest.raises(ValueError, match="appears twice"):
         EncoderBatch([encoders[0], encoders[0]])
     for wrong in ([3], [-1], [1, 1]):  # the kernel has no bounds checks: refused before it
-        with pytest.raises(ValueError, match=r"rows must be distinct encoders in 0\.\.2"):
+        with pytest.raises(ValueError, match=r"rows must be distinct, in 0\.\.2"):
             first.stamp_buffer(packed(len(wrong)), position.crc_extra, wrong)
     assert [e.frames_sent for e in encoders] == count  # nothing numbered by the refusals
 

@@ -23,7 +23,7 @@ from gcs.link.signing import SigningKey, signature, signing_timestamp
 from gcs.link.stamp import stamp_frames
 
 __all__ = ["DEFAULT_GCS_COMPONENT_ID", "DEFAULT_GCS_SYSTEM_ID", "EncoderBatch", "MavlinkEncoder",
-           "frame_dtype", "packed_rows"]
+           "distinct_rows", "frame_dtype", "packed_rows"]
 
 DEFAULT_GCS_SYSTEM_ID = 245
 """The GCS's own MAVLink system id unless configured otherwise."""
@@ -86,6 +86,15 @@ def packed_rows(message_type: type[MavMessage], n: int,
     for name, value in fields.items():
         rows[name] = value
     return rows.view(np.uint8).reshape(n, rows.dtype.itemsize)
+
+
+def distinct_rows(rows: Sequence[int], n: int) -> np.ndarray:
+    """``rows`` as an int64 array, if they are distinct and in ``0..n - 1``; else ValueError."""
+    which = np.asarray(rows, np.int64).reshape(-1)
+    if len(which) and not (which.min() >= 0 and which.max() < n
+                           and len(np.unique(which)) == len(which)):
+        raise ValueError(f"rows must be distinct, in 0..{n - 1}: {which.tolist()}")
+    return which
 
 
 def _check_id(name: str, value: int) -> int:
@@ -294,14 +303,10 @@ class EncoderBatch:
         goes to (default: all, in order). Why one buffer: the caller slices each
         frame as it sends it, one loop over the fleet.
         """
-        n = len(self._encoders)
-        which = self._all if rows is None else np.asarray(rows, np.int64).reshape(-1)
+        # the kernel does not check bounds: a wrong row would write another's counters
+        which = self._all if rows is None else distinct_rows(rows, len(self._encoders))
         if packed.shape[0] != len(which):
             raise ValueError(f"{packed.shape[0]} packed frames for {len(which)} encoders")
-        # the kernel does not check bounds: a wrong row would write another's counters
-        if rows is not None and len(which) and not (which.min() >= 0 and which.max() < n
-                                                    and len(np.unique(which)) == len(which)):
-            raise ValueError(f"rows must be distinct encoders in 0..{n - 1}: {which.tolist()}")
         if not self._counters.current:  # another batch took some encoder meanwhile
             self._counters = self._take()
         # room for a signature where some encoder signs: its frame is put in its row below
