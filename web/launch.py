@@ -1,8 +1,8 @@
 """``gcs demo`` and ``gcs run``: a GCS with its page (and gamepad), until Ctrl-C.
 
 * demo: starts the simulated team (``python -m sim`` at 1x on a free loopback
-  port), a GCS on the simulator's clock joined to it over embedded zenoh (peer
-  mode, no router) and the page, in one command.
+  port), a GCS on the wall clock (as with real vehicles) joined to it over
+  embedded zenoh (peer mode, no router) and the page, in one command.
 * run: the GCS on the wall clock for the vehicles its config's links reach (a
   ``gcs sim`` started by hand, or real autopilots), with its page.
 
