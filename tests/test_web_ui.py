@@ -10,10 +10,13 @@ import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import cast
 
+import msgspec
 import numpy as np
 import pytest
 import viser
+from viser import _messages as viser_messages
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
@@ -23,7 +26,10 @@ from gcs.config import load_team
 from gcs.fleet import FleetState
 from gcs.link.zenoh_session import ZenohSettings
 from gcs.simprocess import free_tcp_port
+from web.actions import OperatorActions
+from web.control import ControlLock
 from web.frame import TeamView, build_frame
+from web.panel import FOLLOW_STEP, ControlPanel
 from web.quadmesh import quad_mesh
 from web.scene import SceneView
 from web.trails import Trails
@@ -53,6 +59,14 @@ class Viewer:
                 continue
             except ConnectionClosed:
                 return
+
+    def report_camera(self, position: tuple[float, float, float],
+                      look_at: tuple[float, float, float]) -> None:
+        """Report a camera as a browser does (viser counts a viewer once it has one)."""
+        message = viser_messages.ViewerCameraMessage(
+            wxyz=(1.0, 0.0, 0.0, 0.0), position=position, fov=1.0, near=0.01, far=1000.0,
+            image_height=600, image_width=800, look_at=look_at, up_direction=(0.0, 0.0, -1.0))
+        self._ws.send(msgspec.msgpack.encode(message.as_serializable_dict()))
 
     def settled(self, quiet: float = 0.4) -> int:
         """Bytes received once nothing more arrived for ``quiet`` seconds."""
@@ -151,3 +165,46 @@ def test_the_page_draws_at_its_rate_beside_a_running_loop() -> None:
         finally:
             viewer.close()
             ui.close()
+
+
+def connected_client(server: viser.ViserServer, viewer: Viewer) -> viser.ClientHandle:
+    """The server's handle of ``viewer``, once it reported its camera."""
+    viewer.report_camera((-3.0, -1.0, -2.0), (0.0, 0.0, 0.0))
+    deadline = time.monotonic() + 10.0
+    while not server.get_clients():
+        assert time.monotonic() < deadline, "the viewer never counted as connected"
+        time.sleep(0.02)
+    (client,) = server.get_clients().values()
+    return client
+
+
+def test_following_the_team_keeps_the_viewers_angle_and_zoom(
+        server: viser.ViserServer) -> None:
+    viewer = Viewer(server.get_port())
+    try:
+        client = connected_client(server, viewer)
+        panel = ControlPanel(client, cast(OperatorActions, object()), ControlLock(),
+                             on_control_change=lambda: None)
+        camera = client.camera
+        centroid = np.array([0.0, 0.0, -1.5])
+        panel.follow_camera(centroid)  # follow starts here
+        position, look_at = camera.position.copy(), camera.look_at.copy()
+        delta = np.array([0.5, -0.2, 0.1])
+        panel.follow_camera(centroid + delta)
+        np.testing.assert_allclose(camera.position, position + delta, atol=1e-9)
+        np.testing.assert_allclose(camera.look_at, look_at + delta, atol=1e-9)  # not 2 delta
+
+        # the viewer orbits and zooms; following moves that view, it does not undo it
+        viewer.report_camera((1.0, 4.0, -6.0), (0.5, 0.0, -1.0))
+        deadline = time.monotonic() + 5.0
+        while not np.allclose(camera.look_at, (0.5, 0.0, -1.0)):
+            assert time.monotonic() < deadline, "the viewer's camera report did not arrive"
+            time.sleep(0.02)
+        panel.follow_camera(centroid + 2 * delta)
+        np.testing.assert_allclose(camera.look_at - camera.position, (-0.5, -4.0, 5.0),
+                                   atol=1e-9)
+        np.testing.assert_allclose(camera.look_at, np.add((0.5, 0.0, -1.0), delta), atol=1e-9)
+        panel.follow_camera(centroid + 2 * delta + FOLLOW_STEP / 2)  # noise: stays put
+        np.testing.assert_allclose(camera.look_at, np.add((0.5, 0.0, -1.0), delta), atol=1e-9)
+    finally:
+        viewer.close()

@@ -43,6 +43,21 @@ HOTKEY_HELP = (
     "they spring back when released.</small>")
 
 
+def _shift_camera(client: viser.ClientHandle, delta: np.ndarray) -> None:
+    """Translate the viewer's camera and its look-at point by ``delta``: same angle, same zoom.
+
+    viser's position setter already carries look_at along (so adding ``delta`` to
+    both, in that order, moved look_at twice and turned the view); look_at is set
+    afterwards to where it must end up, which is a no-op for viser 1.1 and right
+    for a setter that would not carry it.
+    """
+    camera = client.camera
+    position, look_at = camera.position + delta, camera.look_at + delta
+    with client.atomic():
+        camera.position = position
+        camera.look_at = look_at
+
+
 class ControlPanel:
     """The controls of one connected browser.
 
@@ -155,10 +170,7 @@ class ControlPanel:
         if float(np.linalg.norm(delta)) < FOLLOW_STEP:
             return
         self._last_centroid = centroid
-        camera = self.client.camera
-        with self.client.atomic():
-            camera.look_at = camera.look_at + delta
-            camera.position = camera.position + delta
+        _shift_camera(self.client, delta)
 
     def close(self) -> bool:
         """The viewer left: drop control if held (sticks centred); True if it held it."""
