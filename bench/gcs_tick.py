@@ -75,9 +75,11 @@ def ring_team(n: int, folder: Path) -> Path:
     edges = [sorted(p) for p in sorted(pairs, key=sorted)]
     team = {"name": f"ring{n}", "airframe": str(ROOT / "configs/airframes/bebop2.yaml"),
             "vehicles": vehicles, "edges": edges,
-            "guidance": {"c1": 0.17, "c2": 0.3, "rate_hz": 4.0},
+            "guidance": {"c1": 0.17, "c2": 0.3, "rate_hz": 4.0, "max_speed": 1.0,
+                         "max_rotation_disagreement": 0.2},
             "limits": {"bank_deg": 20.0, "accel_norm": 1.0, "accel_axis": 0.7},
             "payload": {"mass": 0.1, "rope_length": radius * 1.5},
+            "analysis": {"max_distance_error": 1.0, "design_rope_angle_deg": 45.0},
             "safety": {"geofence_xy": 1000.0},
             "gcs": {"fleet": f"bench{n}"}}
     path = folder / f"ring{n}.yaml"

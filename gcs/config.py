@@ -7,6 +7,15 @@ with one line naming the file, the field and what is wrong.
 Vehicle positions are in the team's body frame: x forward, y right (NED-like),
 metres. Edges are ``[tail, head]`` or ``[tail, head, distance]`` by vehicle id,
 or mappings ``{tail: 1, head: 2, distance: 1.0}``.
+
+Required fields have no default: the physical and gain figures of a team (its
+airframe file, every field of ``guidance`` but the setpoint rate, the scale
+range and the hold compensation, every field of ``limits`` and ``payload``, and
+``analysis.max_distance_error`` and ``analysis.design_rope_angle_deg``), so a
+file that forgets one is refused instead of flying the paper's numbers. The
+defaults left are engineering choices that are not figures of the paper:
+setpoint re-send rate, scale range, operator shaping, safety thresholds,
+flight-phase heights and timings, standard gravity, links.
 """
 
 from __future__ import annotations
@@ -67,15 +76,15 @@ class GuidanceConfig:
 
     c1: float = field(doc="velocity gain c1, 1/s", gt=0.0)
     c2: float = field(doc="distance gain c2, 1/s^2", gt=0.0)
-    rate_hz: float = field(doc="guidance rate, Hz", default=4.0, gt=0.0, le=100.0)
+    rate_hz: float = field(doc="guidance rate, Hz", gt=0.0, le=100.0)
+    max_speed: float = field(doc="translation speed at full stick, m/s", gt=0.0)
+    max_rotation_disagreement: float = field(
+        doc="largest rotation disagreement mu_r at full stick, m/s", ge=0.0)
     setpoint_rate_hz: float = field(
         doc="setpoints per second to each vehicle: the latest guidance output is re-sent "
             "between ticks, so one late tick does not trip the autopilot's setpoint timeout "
             "(0.5 s in the sim, COM_OF_LOSS_T on PX4); a whole multiple of rate_hz",
         default=12.0, gt=0.0, le=100.0)
-    max_speed: float = field(doc="translation speed at full stick, m/s", default=1.0, gt=0.0)
-    max_rotation_disagreement: float = field(
-        doc="largest rotation disagreement mu_r at full stick, m/s", default=0.2, ge=0.0)
     scale_min: float = field(doc="smallest shape scale", default=0.3, gt=0.0)
     scale_max: float = field(doc="largest shape scale", default=2.0, gt=0.0)
     scale_step: float = field(doc="scale change per operator step", default=0.05, gt=0.0)
@@ -126,13 +135,13 @@ class AnalysisConfig:
     """Assumptions of the worst-case analysis (paper, section 'Force and worst case')."""
 
     max_distance_error: float = field(doc="worst distance error assumed in eq. max, m",
-                                      default=1.0, gt=0.0)
+                                      gt=0.0)
+    design_rope_angle_deg: float = field(
+        doc="largest rope angle from the vertical the design must withstand, degrees",
+        gt=0.0, lt=90.0)
     max_speed_error: float | None = field(
         doc="worst speed error ||e_v|| in eq. max, m/s (default: guidance.max_speed)",
         default=None, gt=0.0)
-    design_rope_angle_deg: float = field(
-        doc="largest rope angle from the vertical the design must withstand, degrees",
-        default=45.0, gt=0.0, lt=90.0)
     payload_share: int | None = field(
         doc="a vehicle may carry 1/share of the payload weight (default: vehicles - 1)",
         default=None, ge=1)
@@ -210,8 +219,7 @@ class TeamConfig:
     guidance: GuidanceConfig = field(doc="guidance gains and ranges")
     limits: LimitsConfig = field(doc="limits")
     payload: PayloadConfig = field(doc="payload and ropes")
-    analysis: AnalysisConfig = field(doc="worst-case analysis assumptions",
-                                     default_factory=AnalysisConfig)
+    analysis: AnalysisConfig = field(doc="worst-case analysis assumptions")
     operator: OperatorConfig = field(doc="operator input shaping",
                                      default_factory=OperatorConfig)
     safety: SafetyConfig = field(doc="safety rules", default_factory=SafetyConfig)

@@ -11,6 +11,11 @@ Bounds and units live in the dataclass fields' metadata, written with
     @dataclass(frozen=True)
     class Payload:
         mass: float = field(doc="payload mass, kg", gt=0.0)
+
+A field without ``default`` is required: a file that leaves it out is refused
+(``missing required field``). Physical figures and gains get no default, so a
+forgotten one can never be silently replaced by another vehicle's or the
+paper's value; defaults are for engineering choices only.
 """
 
 from __future__ import annotations

@@ -7,8 +7,10 @@ from pathlib import Path
 import pytest
 import yaml
 
+from gcs.analysis import analyze
 from gcs.config import ConfigError, load_team
 from gcs.gamepad import load_gamepad_config
+from vehicles.airframe import BEBOP2, load_airframe
 
 SQUARE = Path("configs/bebop_square.yaml")
 
@@ -55,8 +57,59 @@ def test_negative_mass(tmp_path: Path) -> None:
 
 def test_negative_airframe_mass_inline(tmp_path: Path) -> None:
     def inline(d: dict) -> None:
-        d["airframe"] = {"mass": -1.0}
+        d["airframe"] = {**yaml.safe_load(BEBOP2.read_text()), "mass": -1.0}
     refused(tmp_path, inline, "airframe.mass", "greater than 0")
+
+
+@pytest.mark.parametrize("missing", ["mass", "thrust_reference", "inertia", "drag_coefficient"])
+def test_an_airframe_file_missing_a_field_is_refused(tmp_path: Path, missing: str) -> None:
+    """No paper figure stands in for a forgotten one (``{name: mystery}`` gave 5.230 N)."""
+    data = yaml.safe_load(BEBOP2.read_text())
+    data.pop(missing)
+    frame = tmp_path / "mystery.yaml"
+    frame.write_text(yaml.safe_dump(data))
+    with pytest.raises(ConfigError) as info:
+        load_airframe(frame)
+    assert str(info.value) == f"{frame}: {missing}: missing required field"
+    with pytest.raises(ConfigError) as info:  # and through the team file that names it
+        load_team(write(tmp_path, lambda d: d.update(airframe=str(frame))))
+    assert str(info.value) == f"{frame}: {missing}: missing required field"
+
+
+def test_an_airframe_with_only_a_name_is_refused(tmp_path: Path) -> None:
+    frame = tmp_path / "mystery.yaml"
+    frame.write_text("name: mystery\n")
+    with pytest.raises(ConfigError, match=r"^\S*mystery.yaml: mass: missing required field$"):
+        load_airframe(frame)
+
+
+@pytest.mark.parametrize("section, missing", [
+    ("guidance", "c1"), ("guidance", "c2"), ("guidance", "rate_hz"),
+    ("guidance", "max_speed"), ("guidance", "max_rotation_disagreement"),
+    ("limits", "bank_deg"), ("limits", "accel_norm"), ("limits", "accel_axis"),
+    ("payload", "mass"), ("payload", "rope_length"),
+    ("analysis", "max_distance_error"), ("analysis", "design_rope_angle_deg"),
+])
+def test_a_missing_gain_or_physical_field_is_refused(tmp_path: Path, section: str,
+                                                     missing: str) -> None:
+    text = refused(tmp_path, lambda d: d[section].pop(missing), f"{section}.{missing}",
+                   "missing required field")
+    assert text.endswith(f"{section}.{missing}: missing required field")
+
+
+def test_a_missing_analysis_section_is_refused(tmp_path: Path) -> None:
+    refused(tmp_path, lambda d: d.pop("analysis"), "analysis", "missing required field")
+
+
+def test_every_team_file_states_its_gains_and_physics() -> None:
+    """The shipped teams load and analyse from their own figures only."""
+    for path in sorted(Path("configs").glob("bebop_*.yaml")):
+        raw = yaml.safe_load(path.read_text())
+        for section, names in (("guidance", ("c1", "c2", "rate_hz", "max_speed",
+                                              "max_rotation_disagreement")),
+                               ("analysis", ("max_distance_error", "design_rope_angle_deg"))):
+            assert set(names) <= set(raw[section]), (path, section)
+        assert analyze(load_team(path)).ok
 
 
 def test_unknown_field(tmp_path: Path) -> None:

@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 
 from gcs.clock import WallClock
-from gcs.config import GuidanceConfig, OperatorConfig
+from gcs.config import OperatorConfig, load_team
 from gcs.gamepad import Gamepad, GamepadConfig, GamepadMapper, load_gamepad_config
 from gcs.operator import OperatorCommand
 from gcs.typed_config import ConfigError, from_mapping
@@ -26,7 +26,7 @@ from gcs.typed_config import ConfigError, from_mapping
 ROOT = Path(__file__).resolve().parents[1]
 MAPPING = ROOT / "configs" / "gamepad.yaml"
 OP = OperatorConfig(deadzone=0.05, expo=0.0, stick_timeout=5.0, altitude_max=4.0)
-GUI = GuidanceConfig(c1=0.17, c2=0.55)
+GUI = load_team(ROOT / "configs" / "bebop_square.yaml").config.guidance
 
 
 def operator() -> tuple[OperatorCommand, WallClock]:

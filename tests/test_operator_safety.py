@@ -2,16 +2,19 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
-from gcs.config import GuidanceConfig, OperatorConfig, SafetyConfig
+from gcs.config import OperatorConfig, SafetyConfig, load_team
 from gcs.operator import OperatorCommand, shape_stick
 from gcs.safety import DEFORMED, LOST, OUTSIDE, STALE, SafetyReason, evaluate, rule_flags
 
 OP = OperatorConfig(deadzone=0.1, expo=0.5, stick_timeout=1.0, altitude_rate=0.5,
                     altitude_max=3.0, altitude_step=0.25)
-GUI = GuidanceConfig(c1=0.17, c2=0.55, scale_min=0.5, scale_max=1.5, scale_step=0.05)
+GUI = dataclasses.replace(load_team("configs/bebop_square.yaml").config.guidance, scale_min=0.5,
+                          scale_max=1.5, scale_step=0.05)
 
 
 def test_deadzone_and_expo() -> None:

@@ -20,7 +20,7 @@ from sim.scenario import (
     take_off,
 )
 from sim.world import World
-from vehicles.airframe import Airframe, load_airframe
+from vehicles.airframe import bebop2, load_airframe
 from vehicles.autopilot import Autopilot
 from vehicles.config import AutopilotConfig, load_autopilot_config
 
@@ -39,7 +39,7 @@ def snapshot(world: World, autopilot: Autopilot) -> list[np.ndarray]:
 def test_shipped_config_files_state_the_defaults() -> None:
     assert load_world_config(DEFAULT_WORLD_CONFIG) == WorldConfig()
     assert load_autopilot_config(DEFAULT_AUTOPILOT_CONFIG) == AutopilotConfig()
-    assert load_airframe(DEFAULT_AIRFRAME) == Airframe()
+    assert load_airframe(DEFAULT_AIRFRAME) == bebop2()  # no defaults: every field in the file
 
 
 @pytest.mark.parametrize("mapping, where, words", [
@@ -68,7 +68,7 @@ def test_a_wrong_autopilot_file_is_refused_naming_the_field(tmp_path: Path) -> N
 
 
 def test_world_refuses_inconsistent_arrays() -> None:
-    airframe, config = Airframe(), WorldConfig()
+    airframe, config = bebop2(), WorldConfig()
     good = {"airframe": airframe, "config": config, "p0_ned": np.zeros((2, 3)),
             "rope_length": np.ones(2), "payload_mass": 0.4, "payload_p0_ned": np.zeros(3),
             "rng": np.random.default_rng(0)}
