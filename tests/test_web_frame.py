@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
@@ -13,7 +14,7 @@ from gcs.config import load_team
 from gcs.fleet import FleetState
 from gcs.simtruth import SimTruth
 from web import palette
-from web.frame import LABEL_LIFT, TeamView, build_frame, vehicle_states
+from web.frame import LABEL_LIFT, TeamView, build_frame, rope_pull_estimate, vehicle_states
 from web.palette import VehicleState
 from web.quadmesh import quad_mesh, yaw_wxyz
 from web.shapefit import fit_shape
@@ -192,7 +193,7 @@ def test_frame_without_truth_estimates_the_payload_and_hides_unknown_vehicles() 
     assert not flying.known[2] and np.all(flying.p_ned[2] == 0.0)
     assert len(flying.edges) == 3  # only edges between known vehicles
     assert not flying.payload_measured and len(flying.ropes) == 3
-    assert np.all(flying.rope_colors == palette.UNKNOWN)
+    assert not np.any(np.all(flying.rope_colors == palette.UNKNOWN, axis=-1))  # estimated
     assert flying.payload_p is not None and -2.0 < flying.payload_p[2] < 0.0  # hanging
     grounded = build_frame(VIEW, fleet_at(VIEW.desired_xy, z=-0.2), scale=1.0, truth=None,
                            trails=Trails(4))
@@ -201,6 +202,34 @@ def test_frame_without_truth_estimates_the_payload_and_hides_unknown_vehicles() 
     empty = build_frame(VIEW, fleet_at(nobody), scale=1.0, truth=None, trails=Trails(4))
     assert empty.payload_p is None and empty.centroid is None
     assert len(empty.ropes) == len(empty.edges) == len(empty.ghost_edges) == 0
+
+
+def test_without_truth_ropes_are_coloured_by_the_pull_estimated_from_tilt() -> None:
+    """Real vehicles (no simulator): the ropes read slack, nominal or overloaded all the same."""
+    g = 9.80665
+    # tilts whose pull is none, the nominal (eq. Th) and twice it; one tilt unknown
+    nominal_tilt = math.atan(VIEW.nominal_pull / (VIEW.mass * g))
+    double_tilt = math.atan(2 * VIEW.nominal_pull / (VIEW.mass * g))
+    fleet = fleet_at(VIEW.desired_xy, z=-2.0)
+    fleet = dataclasses.replace(fleet, tilt=np.array([0.0, nominal_tilt, double_tilt, np.nan]))
+    frame = build_frame(VIEW, fleet, scale=1.0, truth=None, trails=Trails(4))
+    assert not frame.payload_measured
+    colors = [tuple(int(c) for c in frame.rope_colors[i, 0]) for i in range(4)]
+    assert colors == [(120, 144, 156), (46, 204, 113), (231, 76, 60),
+                      tuple(int(c) for c in palette.UNKNOWN)]
+    np.testing.assert_array_equal(
+        frame.rope_colors[:3, 1],
+        palette.tension_colors(rope_pull_estimate(VIEW.mass, fleet.tilt, np.zeros((4, 2))),
+                               VIEW.nominal_pull)[:3])
+    # a tilt the commanded acceleration explains is not rope pull
+    accel = np.zeros((4, 2))
+    accel[2] = [g * math.tan(double_tilt), 0.0]
+    steering = build_frame(VIEW, fleet, scale=1.0, truth=None, trails=Trails(4), accel_cmd=accel)
+    assert tuple(int(c) for c in steering.rope_colors[2, 0]) == (120, 144, 156)
+    # a view without the airframe (a replayed log) cannot estimate: grey
+    bare = dataclasses.replace(VIEW, mass=math.nan, nominal_pull=math.nan)
+    unknown = build_frame(bare, fleet, scale=1.0, truth=None, trails=Trails(4))
+    assert np.all(unknown.rope_colors == palette.UNKNOWN)
 
 
 def test_edge_colours_follow_the_operator_scale() -> None:

@@ -85,6 +85,27 @@ def test_summary_shows_phase_command_control_payload_and_timing() -> None:
                                                          control="", ui=None)
 
 
+def test_the_rope_legend_says_whether_ropes_are_measured_or_estimated() -> None:
+    truth = SimTruth(t=5.0, ids=VIEW.ids, vehicle_p_ned=((0.0, 0.0, 0.0),) * 4,
+                     payload_p_ned=(0.1, 0.2, -0.75), payload_v_ned=(0.3, 0.4, 0.0),
+                     rope_tension=(1.2,) * 4)
+
+    def legend(snap: RuntimeSnapshot) -> str:
+        html = summary_html(snap, loop=None, control="", ui=None)
+        return re.search(r'data-gcs="ropes"[^>]*>(.*?)</span></div>', html).group(1)  # type: ignore[union-attr]
+
+    assert legend(snapshot(truth=truth)).startswith("tension (simulator)")
+    estimated = legend(snapshot())  # real vehicles: no truth
+    assert estimated.startswith("horizontal pull estimated from tilt")
+    assert "nominal (eq. Th)" in estimated and "rgb(46,204,113)" in estimated  # green: nominal
+    partial = SimTruth(t=5.0, ids=VIEW.ids[:2], vehicle_p_ned=((0.0, 0.0, 0.0),) * 2,
+                       payload_p_ned=(0.1, 0.2, -0.75), payload_v_ned=(0.3, 0.4, 0.0),
+                       rope_tension=(1.2,) * 2)
+    assert "estimated" in legend(snapshot(truth=partial))  # as the scene: truth for all or none
+    rows = vehicles_html(snapshot(), health={}, truth=None, mass=0.4, stale_after=0.5)
+    assert 'title="horizontal rope pull estimated from tilt' in rows
+
+
 def test_summary_shows_a_frozen_or_landing_team() -> None:
     event = SafetyEvent(SafetyReason.STALE, 2, "vehicle 2: stale")
     frozen = SafetyVerdict(freeze=True, land=False, events=(event,))

@@ -23,7 +23,7 @@ from web.quadmesh import yaw_wxyz
 from web.shapefit import fit_shape
 from web.trails import Trails
 
-__all__ = ["SceneFrame", "TeamView", "build_frame", "vehicle_states"]
+__all__ = ["SceneFrame", "TeamView", "build_frame", "rope_pull_estimate", "vehicle_states"]
 
 _HOLD_WORDS = ("HOLD", "LOITER", "POSCTL", "BRAKE")
 _LAND_WORDS = ("LAND", "RTL")
@@ -47,6 +47,8 @@ class TeamView:
     nominal_tension: float  # rope tension at equilibrium, N
     stale_after: float  # s
     error_full: float = 0.3  # distance error shown fully red, m (paper's worst observed)
+    mass: float = math.nan  # one vehicle's mass, kg (NaN: no rope pull estimate)
+    nominal_pull: float = math.nan  # horizontal rope pull at the nominal shape (eq. Th), N
 
     @classmethod
     def from_team(cls, team: Team, analysis: Analysis) -> TeamView:
@@ -54,7 +56,8 @@ class TeamView:
         return cls(ids=f.ids, desired_xy=f.positions, edges=f.edges, distances=f.distances,
                    rope_length=team.config.payload.rope_length,
                    nominal_tension=analysis.equilibrium_tension,
-                   stale_after=team.config.safety.stale_after)
+                   stale_after=team.config.safety.stale_after,
+                   mass=team.config.airframe.mass, nominal_pull=analysis.rope_pull_nominal)
 
     @property
     def n(self) -> int:
@@ -76,7 +79,8 @@ class SceneFrame:
     ropes: np.ndarray  # (r, 2, 3) vehicle to payload, m
     rope_colors: np.ndarray  # (r, 2, 3) uint8
     payload_p: np.ndarray | None  # (3,) m, None while the team is unknown
-    payload_measured: bool  # from the simulator's truth (else estimated from geometry)
+    payload_measured: bool  # payload and rope tensions from the simulator's truth; else the
+    # payload is placed from geometry and the ropes coloured by the pull estimated from tilt
     edges: np.ndarray  # (e, 2, 3) formation edges with both ends known, m
     edge_colors: np.ndarray  # (e, 2, 3) uint8
     ghost_edges: np.ndarray  # (m, 2, 3) or (0, 2, 3): desired shape fitted to the team, m
@@ -107,6 +111,32 @@ def vehicle_states(fleet: FleetState, stale_after: float) -> np.ndarray:
     return states
 
 
+def rope_pull_estimate(mass: float, tilt: np.ndarray, accel_cmd: np.ndarray,
+                       gravity: float = 9.80665) -> np.ndarray:
+    """Horizontal rope pull per vehicle from its tilt, N (quasi-static, a lower bound).
+
+    A vehicle that holds its altitude and tilts by ``tilt`` pushes sideways with
+    about ``m g tan(tilt)``; what its commanded acceleration does not explain is
+    the rope pulling it. Ignoring the rope's vertical load makes this a lower
+    bound; it is only meaningful in steady flight.
+    """
+    side = mass * (gravity * np.tan(np.nan_to_num(tilt)) -
+                   np.linalg.norm(np.nan_to_num(accel_cmd), axis=1))
+    return np.where(np.isfinite(tilt), np.maximum(side, 0.0), np.nan)
+
+
+def _rope_colors(view: TeamView, fleet: FleetState, known: np.ndarray, tension: np.ndarray,
+                 measured: bool, accel_cmd: np.ndarray | None) -> np.ndarray:
+    """Colour per known vehicle's rope: the simulator's tension against its equilibrium,
+    else the pull estimated from tilt against the nominal pull (eq. Th), the same scale."""
+    if measured:
+        return palette.tension_colors(tension[known], view.nominal_tension)
+    accel = np.zeros((view.n, 2)) if accel_cmd is None or len(accel_cmd) != view.n \
+        else accel_cmd
+    pull = rope_pull_estimate(view.mass, fleet.tilt, accel)
+    return palette.tension_colors(pull[known], view.nominal_pull)
+
+
 def _payload(view: TeamView, p: np.ndarray, known: np.ndarray,
              truth: SimTruth | None) -> tuple[np.ndarray | None, bool, np.ndarray]:
     """Payload position, whether measured, and each vehicle's rope tension (NaN: unknown)."""
@@ -130,10 +160,11 @@ def _pairs(colors: np.ndarray) -> np.ndarray:
 
 
 def build_frame(view: TeamView, fleet: FleetState, *, scale: float, truth: SimTruth | None,
-                trails: Trails) -> SceneFrame:
+                trails: Trails, accel_cmd: np.ndarray | None = None) -> SceneFrame:
     """The scene for the fleet's state; ``scale`` is the operator's shape scale.
 
-    ``trails`` is only read: the caller samples it (at its own rate).
+    ``trails`` is only read: the caller samples it (at its own rate). ``accel_cmd``
+    (n, 2), the loop's latest command, sharpens the rope pull estimated without truth.
     """
     known = np.isfinite(fleet.p_ned).all(axis=1)
     everyone = bool(known.all())
@@ -151,7 +182,7 @@ def build_frame(view: TeamView, fleet: FleetState, *, scale: float, truth: SimTr
     ropes = np.empty((0 if payload_p is None else len(hanging), 2, 3))
     ropes[:, 0] = hanging
     ropes[:, 1] = payload_p if payload_p is not None else 0.0
-    rope_colors = _pairs(palette.tension_colors(tension[known], view.nominal_tension)
+    rope_colors = _pairs(_rope_colors(view, fleet, known, tension, measured, accel_cmd)
                          if payload_p is not None else np.zeros((0, 3), dtype=np.uint8))
 
     ends = view.edges if everyone else view.edges[known[view.edges].all(axis=1)]

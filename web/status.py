@@ -17,10 +17,11 @@ import numpy as np
 from gcs.link.health import LinkHealth
 from gcs.runtime import RuntimeSnapshot, TickStats
 from gcs.simtruth import SimTruth
-from web.frame import vehicle_states
-from web.palette import VehicleState, state_colors
+from web.frame import rope_pull_estimate, vehicle_states
+from web.palette import VehicleState, state_colors, tension_colors
 
-__all__ = ["UiStats", "events_html", "rope_pull_estimate", "summary_html", "vehicles_html"]
+__all__ = ["UiStats", "events_html", "rope_legend", "rope_pull_estimate", "summary_html",
+           "vehicles_html"]
 
 _LEVEL_COLOR = {"info": "#455a64", "warning": "#e67e22", "error": "#c0392b"}
 _CELL = "padding:1px 5px;text-align:right;white-space:nowrap"
@@ -33,20 +34,6 @@ class UiStats:
     rate_hz: float
     draw_ms: float  # median over the recent frames
     draw_p99_ms: float
-
-
-def rope_pull_estimate(mass: float, tilt: np.ndarray, accel_cmd: np.ndarray,
-                       gravity: float = 9.80665) -> np.ndarray:
-    """Horizontal rope pull per vehicle from its tilt, N (quasi-static, a lower bound).
-
-    A vehicle that holds its altitude and tilts by ``tilt`` pushes sideways with
-    about ``m g tan(tilt)``; what its commanded acceleration does not explain is
-    the rope pulling it. Ignoring the rope's vertical load makes this a lower
-    bound; it is only meaningful in steady flight.
-    """
-    side = mass * (gravity * np.tan(np.nan_to_num(tilt)) -
-                   np.linalg.norm(np.nan_to_num(accel_cmd), axis=1))
-    return np.where(np.isfinite(tilt), np.maximum(side, 0.0), np.nan)
 
 
 def _num(x: float, fmt: str, unit: str = "") -> str:
@@ -65,6 +52,29 @@ def _payload_text(truth: SimTruth | None) -> str:
     x, y, z = truth.payload_p_ned
     return (f"{_num(-z, '.2f')} m up at ({_num(x, '.2f')}, {_num(y, '.2f')}) m, speed "
             f"{math.hypot(*truth.payload_v_ned):.2f} m/s (simulator)")
+
+
+def _truth_covers(truth: SimTruth | None, ids: tuple[int, ...]) -> bool:
+    """True when the simulator's truth measures every vehicle's rope (the scene's rule)."""
+    return truth is not None and set(truth.ids) >= set(ids)
+
+
+def _swatch(rgb: np.ndarray) -> str:
+    r, g, b = (int(c) for c in rgb)
+    return f'<span style="color:rgb({r},{g},{b})">&#9644;</span>'
+
+
+def rope_legend(measured: bool) -> str:
+    """What the ropes' colours mean: the simulator's tension, or the pull estimated from tilt."""
+    slack, nominal, double = tension_colors(np.array([0.0, 1.0, 2.0]), 1.0)
+    if measured:
+        what, scale = "tension (simulator)", "equilibrium"
+    else:
+        what, scale = ("horizontal pull estimated from tilt (no simulator: a lower bound, "
+                       "meaningful in steady flight)", "nominal (eq. Th)")
+    return (f'<span data-gcs="ropes" title="rope colours">{what}: {_swatch(slack)} slack '
+            f'{_swatch(nominal)} {scale} {_swatch(double)} twice, '
+            f'{_swatch(tension_colors(np.array([np.nan]), 1.0)[0])} unknown</span>')
 
 
 def summary_html(snap: RuntimeSnapshot | None, *, loop: TickStats | None, control: str,
@@ -100,6 +110,7 @@ def summary_html(snap: RuntimeSnapshot | None, *, loop: TickStats | None, contro
         f'<div>command <span data-gcs="operator">{command}</span></div>'
         f'<div>control <span data-gcs="control">{html.escape(control)}</span></div>'
         f'<div>payload <span data-gcs="payload">{_payload_text(snap.truth)}</span></div>'
+        f'<div>ropes {rope_legend(_truth_covers(snap.truth, snap.fleet.ids))}</div>'
         f'<div style="color:#78909c">{timing}{ui_text}</div>'
         '</div>')
 
@@ -113,8 +124,10 @@ def vehicles_html(snap: RuntimeSnapshot | None, *, health: Mapping[int, LinkHeal
     states = vehicle_states(f, stale_after)
     colors = state_colors(states)
     pull = rope_pull_estimate(mass, f.tilt, snap.accel_cmd)
-    measured = truth is not None and set(truth.ids) >= set(f.ids)
-    rope_head = "rope N (sim)" if measured else "rope pull ≈ N"
+    measured = _truth_covers(truth, f.ids)
+    rope_head = "rope N (sim)" if measured else (
+        '<span title="horizontal rope pull estimated from tilt (a lower bound)">'
+        "rope pull ≈ N</span>")
     head = ("id", "state", "mode", "armed", "batt %", "tilt °", "alt m", rope_head, "hb s",
             "lost", "refused", "rtt ms")
     rows = []

@@ -196,7 +196,8 @@ class WebUi:
         snap = self._snapshot
         self._trails.add(fleet.t, fleet.p_ned)
         frame = build_frame(self._view, fleet, scale=snap.operator.demand.scale if snap else 1.0,
-                            truth=app.truth, trails=self._trails)
+                            truth=app.truth, trails=self._trails,
+                            accel_cmd=snap.accel_cmd if snap else None)
         with self.server.atomic():
             self._scene.draw(frame)
         self._frame_costs.append(time.perf_counter() - started)
