@@ -39,9 +39,9 @@ def _write_log(path: Path, count: int) -> None:
         for k in range(count):
             mav = signing if k % 11 == 0 else mavlink.MAVLink(None, srcSystem=1 + k % 3,
                                                                srcComponent=1)
-            if k % 7 == 0 and mav is not signing:
-                mav.WIRE_PROTOCOL_VERSION = "1.0"
-            frame = _message(k % len(_NAMES), k, rng).pack(mav)
+            msg = _message(k % len(_NAMES), k, rng)
+            v1 = k % 7 == 0 and mav is not signing and msg.id < 256  # MAVLink 1 ids are a byte
+            frame = msg.pack(mav, force_mavlink1=v1)
             fh.write(struct.pack(">Q", int((1.7e9 + k * 0.01) * 1e6)) + frame)
 
 

@@ -14,11 +14,12 @@ from numba import njit
 
 from gcs.link.unpack import HEADER_V2
 
-__all__ = ["stamp_frames"]
+__all__ = ["crc_accumulate", "stamp_frames"]
 
 
 @njit(cache=True)
-def _crc_accumulate(byte: int, crc: int) -> int:
+def crc_accumulate(byte: int, crc: int) -> int:
+    """One byte into MAVLink's running CRC-16/MCRF4XX (X.25), for compiled callers."""
     tmp = (byte ^ crc) & 0xFF
     tmp = (tmp ^ (tmp << 4)) & 0xFF
     return ((crc >> 8) ^ (tmp << 8) ^ (tmp << 3) ^ (tmp >> 4)) & 0xFFFF
@@ -60,11 +61,11 @@ def stamp_frames(packed: np.ndarray, rows: np.ndarray, counters: np.ndarray, sys
         out[k, 6] = compid[i]
         crc = 0xFFFF
         for j in range(1, 7):
-            crc = _crc_accumulate(out[k, j], crc)
+            crc = crc_accumulate(out[k, j], crc)
         for j in range(7, end):
             out[k, j] = packed[k, j]
-            crc = _crc_accumulate(packed[k, j], crc)
-        crc = _crc_accumulate(crc_extra, crc)
+            crc = crc_accumulate(packed[k, j], crc)
+        crc = crc_accumulate(crc_extra, crc)
         out[k, end] = crc & 0xFF
         out[k, end + 1] = crc >> 8
         lengths[k] = end + 2
