@@ -11,6 +11,7 @@ from gcs.guidance import Guidance, MotionDemand, formation_acceleration, saturat
 from gcs.motion import centripetal_matrix, edges_to_slots, motion_basis
 
 SQUARE = "configs/bebop_square.yaml"
+TEAMS = [SQUARE, "configs/bebop_triangle.yaml", "configs/bebop_hexagon.yaml"]
 
 # Eq. (B) of the paper, rows = vehicles 1..4, columns = z1..z6.
 PAPER_B = np.array([
@@ -45,14 +46,24 @@ def test_positions_realised_from_distances() -> None:
     np.testing.assert_allclose(f.positions.mean(axis=0), 0, atol=1e-9)
 
 
-def test_translation_disagreements_reproduce_velocity() -> None:
-    f = load_team(SQUARE).formation
+@pytest.mark.parametrize("config", TEAMS)
+def test_translation_disagreements_reproduce_velocity(config: str) -> None:
+    f = load_team(config).formation
     basis = motion_basis(f)
     for A, want in ((basis.translate_x, [1.0, 0.0]), (basis.translate_y, [0.0, 1.0])):
-        np.testing.assert_allclose(basis.desired_velocities(A), np.tile(want, (4, 1)),
+        np.testing.assert_allclose(basis.desired_velocities(A), np.tile(want, (f.n, 1)),
                                    atol=1e-12)
         # like the paper's A_v: a vehicle only uses its own edges
         assert np.all(A[f.incidence == 0] == 0)
+
+
+@pytest.mark.parametrize("config", TEAMS)
+def test_rotation_disagreements_reproduce_the_spin_about_the_centroid(config: str) -> None:
+    f = load_team(config).formation
+    basis = motion_basis(f)
+    spin = np.column_stack((-f.positions[:, 1], f.positions[:, 0]))  # omega x r, 1 rad/s
+    np.testing.assert_allclose(basis.desired_velocities(basis.rotate), spin, atol=1e-12)
+    assert np.all(basis.rotate[f.incidence == 0] == 0)
 
 
 def test_square_rotation_uses_the_sides_with_equal_disagreements() -> None:
@@ -65,10 +76,11 @@ def test_square_rotation_uses_the_sides_with_equal_disagreements() -> None:
     np.testing.assert_allclose(sides, 0.5)  # omega * side / 2 per rad/s
 
 
+@pytest.mark.parametrize("config", TEAMS)
 @pytest.mark.parametrize("vx, vy, omega", [(0.0, 0.0, 0.4), (0.5, -0.2, 0.3), (0.7, 0.1, 0.0)])
-def test_proposition_1_centripetal_term(vx: float, vy: float, omega: float) -> None:
+def test_proposition_1_centripetal_term(config: str, vx: float, vy: float, omega: float) -> None:
     """A_a zhat* equals the acceleration of the rigid motion: omega x v*."""
-    f = load_team(SQUARE).formation
+    f = load_team(config).formation
     basis = motion_basis(f)
     A_v = basis.velocity_matrix(vx, vy, omega, 1.0)
     z = f.relative(f.positions)

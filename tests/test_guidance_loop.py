@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -30,21 +32,76 @@ def test_runs_at_configured_rate(guidance: Guidance) -> None:
     assert guidance.period == pytest.approx(0.25)
 
 
-def test_shape_reached_from_perturbed_start_with_exponential_decay(guidance: Guidance) -> None:
-    rng = np.random.default_rng(7)
+@pytest.mark.parametrize("seed", [7, 11, 23, 42])
+def test_shape_reached_from_perturbed_start_with_exponential_decay(guidance: Guidance,
+                                                                   seed: int) -> None:
+    """The error decays at the rate the gains set, from several perturbed starts.
+
+    Every shape mode of the square, triangle and hexagon is underdamped with
+    these gains (c2 lambda > c1^2 / 4), so the envelope decays as exp(-c1 t / 2):
+    time constant 2 / c1 = 11.8 s. Measured on this loop (24 starts): a fitted
+    11.5 s, and 10.4 to 13.1 s over any 40 s window. The bounds keep a margin of
+    10 % on the fit and 25 % on each window.
+    """
+    rng = np.random.default_rng(seed)
     f = guidance.formation
-    p0 = f.positions + rng.uniform(-0.25, 0.25, f.positions.shape) + [3.0, -2.0]
+    p0 = f.positions + rng.uniform(-0.25, 0.25, f.positions.shape) + rng.uniform(-5, 5, 2)
     v0 = rng.uniform(-0.2, 0.2, p0.shape)
     tr = fly(guidance, p0, v0, MotionDemand(), duration=240.0)
     err = worst_error(guidance, tr.p)
     assert err[0] > 0.05
-    # Exponential decay: the envelope over successive 40 s windows shrinks by a
-    # steady factor, and the error ends orders of magnitude below the start.
-    windows = err[: (len(err) // 160) * 160].reshape(-1, 160).max(axis=1)
+    tau = 2.0 / guidance.c1
+    live = err > 1e-8  # above the floor of double-precision arithmetic
+    fitted = -1.0 / np.polyfit(tr.t[live], np.log(err[live]), 1)[0]
+    assert fitted == pytest.approx(tau, rel=0.10)
+    ticks = round(40.0 / guidance.period)
+    windows = err[: (len(err) // ticks) * ticks].reshape(-1, ticks).max(axis=1)
     ratios = windows[1:] / windows[:-1]
-    assert np.all(ratios < 0.6), ratios
-    assert err[-1] < 1e-3 * err[0]
-    assert np.abs(tr.v[-1]).max() < 1e-3
+    assert np.all(ratios < np.exp(-40.0 / (1.25 * tau))), ratios
+    assert err[-1] < 1e-8 * err[0]
+    assert np.abs(tr.v[-1]).max() < 1e-8
+
+
+def spin(g: Guidance, v0: np.ndarray, duration: float) -> tuple[np.ndarray, np.ndarray]:
+    """Spin at full rotation stick: spin-rate error (fraction) and worst shape error per 20 s."""
+    f = g.formation
+    demand = MotionDemand(rotate=1.0)
+    tr = fly(g, f.positions, v0, demand, duration=duration)
+    r = tr.p[:, 0] - tr.p.mean(axis=1)
+    turned = np.unwrap(np.arctan2(r[:, 1], r[:, 0]))
+    ticks = round(20.0 / g.period)
+    rate = np.diff(turned[::ticks]) / (ticks * g.period)
+    shape = worst_error(g, tr.p)[: len(rate) * ticks].reshape(len(rate), ticks).max(axis=1)
+    return rate / g.angular_rate(demand) - 1.0, shape
+
+
+def test_plain_eq_udi_at_4_hz_with_the_papers_gains_is_unstable_on_the_square() -> None:
+    """Why the guidance compensates the hold (gcs.guidance).
+
+    Without it, the square's stiffest shape mode (lambda = 4) under a 4 Hz
+    zero-order hold has c2 lambda T / 2 = 0.275 > c1 = 0.17: it grows with a time
+    constant of about 19 s. Started on the rigid spin, the team first turns about
+    15 % too fast with a few cm of shape error, and the error keeps growing; from
+    rest it reaches about +89 % and 1.4 m after 150 s (the saturation bounds it
+    near +120 % and 2 m). With the compensation: within 0.1 % and 1 mm.
+    """
+    team = load_team(TEAMS[0])
+    on = Guidance.from_team(team)
+    off = Guidance.from_team(dataclasses.replace(team, config=dataclasses.replace(
+        team.config, guidance=dataclasses.replace(team.config.guidance,
+                                                  hold_compensation=False))))
+    assert off.lead == 0.0 and on.lead == pytest.approx(0.125)
+    v_star = on.basis.desired_velocities(on.velocity_matrix(MotionDemand(rotate=1.0)))
+
+    rate_on, shape_on = spin(on, v_star, 160.0)
+    assert np.abs(rate_on).max() < 1e-3 and shape_on.max() < 1e-3
+    rate_off, shape_off = spin(off, v_star, 160.0)
+    assert np.all(rate_off[1:] > 0.10)  # inaccurate: turns over 10 % too fast
+    assert np.all(np.diff(shape_off) > 0)  # unstable: the shape error only grows
+    assert shape_off[-1] > 2 * shape_off[0] > 0.04
+
+    rate_off, shape_off = spin(off, np.zeros_like(v_star), 160.0)
+    assert rate_off[-1] > 0.5 and shape_off[-1] > 1.0
 
 
 def test_translation_gives_commanded_velocity_and_keeps_shape(guidance: Guidance) -> None:
