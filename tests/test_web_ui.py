@@ -25,10 +25,10 @@ from gcs.app import GcsApp
 from gcs.config import load_team
 from gcs.fleet import FleetState
 from gcs.link.zenoh_session import ZenohSettings
-from gcs.simprocess import free_tcp_port
+from gcs.simprocess import SimProcess, free_tcp_port
 from web.actions import OperatorActions
 from web.control import ControlLock
-from web.frame import TeamView, build_frame
+from web.frame import SceneFrame, TeamView, build_frame
 from web.panel import FOLLOW_STEP, ControlPanel
 from web.quadmesh import quad_mesh
 from web.scene import SceneView
@@ -208,3 +208,59 @@ def test_following_the_team_keeps_the_viewers_angle_and_zoom(
         np.testing.assert_allclose(camera.look_at, np.add((0.5, 0.0, -1.0), delta), atol=1e-9)
     finally:
         viewer.close()
+
+
+STALL_S = 0.5
+"""How long each of the page's scene draws takes in the slow-page test, s (two loop periods)."""
+
+
+def _stall(how: str) -> None:
+    """Hold the UI thread: asleep (a blocked send), or busy in Python (holding the GIL)."""
+    end = time.perf_counter() + STALL_S
+    if how == "sleep":
+        time.sleep(STALL_S)
+        return
+    x = 0
+    while time.perf_counter() < end:
+        x += 1
+
+
+@pytest.mark.parametrize("how", ["sleep", "spin"])
+def test_a_slow_page_never_delays_the_loop(monkeypatch: pytest.MonkeyPatch, how: str) -> None:
+    """Each frame of the page takes 0.5 s (two loop periods): the loop keeps its 4 Hz."""
+    draw = SceneView.draw
+
+    def slow_draw(self: SceneView, frame: SceneFrame) -> None:
+        _stall(how)
+        draw(self, frame)
+
+    monkeypatch.setattr(SceneView, "draw", slow_draw)
+    endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
+    with SimProcess(ROOT / "configs" / "bebop_square.yaml", endpoint=endpoint, speed="1"), \
+            GcsApp(TEAM, zenoh_settings=ZenohSettings(mode="peer", connect=(endpoint,))) as app:
+        ticks: list[float] = []
+        app.add_listener(lambda _snap, _truth: ticks.append(time.monotonic()))
+        ui = WebUi(app, port=free_tcp_port())
+        viewer = Viewer(ui.server.get_port())
+        try:
+            app.start()
+            ui.start()
+            deadline = time.monotonic() + 20.0
+            while not np.isfinite(app.runtime.fleet_table.read(app.clock.now()).p_ned).all():
+                assert time.monotonic() < deadline, "the simulated team was never heard"
+                time.sleep(0.1)
+            start = len(ticks)
+            time.sleep(3.0)
+            gaps = np.diff(ticks[start:])
+            print(f"{how}: tick gaps {gaps.min():.3f}-{gaps.max():.3f} s, loop jitter p99 "
+                  f"{1e3 * app.runtime.stats().jitter_p99:.1f} ms, page frame "
+                  f"{ui.stats().draw_ms:.0f} ms")
+            assert ui.stats().draw_ms >= 1e3 * STALL_S  # the page really was that slow
+            assert len(gaps) >= 10, f"{len(gaps) + 1} ticks in 3 s"
+            # 4 Hz: 0.25 s apart, a tick at most 60 ms late, never a skipped period
+            assert gaps.max() < 0.31 and gaps.min() > 0.19, gaps
+            assert app.runtime.stats().jitter_p99 < 0.06
+            assert app.runtime.stats().overruns == 0
+        finally:
+            viewer.close()
+            ui.close()
