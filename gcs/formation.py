@@ -165,6 +165,22 @@ def edge_errors(positions: np.ndarray, edges: np.ndarray, distances: np.ndarray,
     return out
 
 
+def _why_not_rigid(positions: np.ndarray, edges: np.ndarray) -> str:
+    """Why a shape is flexible, and the remedy: more edges, or a shape off a line.
+
+    When even the complete graph on these positions is flexible, no edge helps:
+    the geometry is degenerate (in the plane, all vehicles on one line).
+    """
+    n = len(positions)
+    rank = int(np.linalg.matrix_rank(rigidity_matrix(positions, edges), tol=1e-8))
+    need = f"rigidity matrix rank {rank}, needs {2 * n - 3}"
+    complete = np.array([(i, j) for i in range(n) for j in range(i + 1, n)], dtype=np.int64)
+    if is_infinitesimally_rigid(positions, complete):
+        return f"the graph is not rigid: {need} (add edges)"
+    return (f"the shape is degenerate: the vehicles are collinear, so no choice of edges "
+            f"makes it rigid ({need}); place them off a line")
+
+
 def build_formation(
     ids: Sequence[int],
     edges_by_id: Sequence[tuple[int, int]],
@@ -228,9 +244,7 @@ def build_formation(
         p = p - p.mean(axis=0)
 
     if not is_infinitesimally_rigid(p, edges):
-        rank = int(np.linalg.matrix_rank(rigidity_matrix(p, edges), tol=1e-8))
-        raise FormationError("edges", f"the graph is not rigid: rigidity matrix rank {rank}, "
-                             f"needs {2 * n - 3} (add edges)")
+        raise FormationError("edges", _why_not_rigid(p, edges))
 
     slots = max(int(np.sum(edges == i)) for i in range(n))
     nb = np.zeros((n, slots), dtype=np.int64)

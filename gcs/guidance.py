@@ -9,9 +9,12 @@ acceleration (tested).
 Sample-and-hold compensation. The GCS runs the guidance at 4 Hz and each
 vehicle holds the acceleration until the next tick. With the paper's gains a
 zero-order hold at 4 Hz destabilises the stiffest shape mode of a plain double
-integrator (for the square, c2 * lambda_max * T / 2 = 0.275 > c1 = 0.17), and
-the held feed-forward of a spinning team lags its rotation (15 % too fast a
-spin at 4 Hz). So eq. udi is evaluated at the relative positions predicted half
+integrator (for the square, c2 * lambda_max * T / 2 = 0.275 > c1 = 0.17: that
+mode grows with a time constant of about 19 s), and the held feed-forward of a
+spinning team lags its rotation (started on the rigid spin, the square turns
+about 15 % too fast while its shape error grows from 3 cm; from rest it ends
+turning about twice as fast, 2 m out of shape, held only by the saturation).
+So eq. udi is evaluated at the relative positions predicted half
 a period ahead: the edge directions along ``p_i - p_j + (T/2)(v_i - v_j)`` and
 the distance errors to first order, ``e_k + (T/2) d||z_k||/dt`` (which is zero
 in rigid motion). The hold's average delay is cancelled. With ``lead = 0`` the

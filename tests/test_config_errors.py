@@ -135,6 +135,15 @@ def test_graph_not_rigid(tmp_path: Path) -> None:
     refused(tmp_path, ring, "edges", "not rigid")
 
 
+def test_collinear_shape_is_degenerate_not_short_of_edges(tmp_path: Path) -> None:
+    def line(d: dict) -> None:
+        d["vehicles"] = [{"id": k + 1, "position": [float(k), 0.0]} for k in range(4)]
+        d["edges"] = [[i, j] for i in range(1, 5) for j in range(i + 1, 5)]  # complete
+    text = refused(tmp_path, line, "edges", "the shape is degenerate: the vehicles are collinear")
+    assert "add edges" not in text
+    assert "place them off a line" in text
+
+
 def test_duplicate_vehicle_id(tmp_path: Path) -> None:
     refused(tmp_path, lambda d: d["vehicles"][2].update(id=1), "vehicles", "appears twice")
 
