@@ -12,6 +12,11 @@ The mapping from SDL axis and button numbers is a YAML file
   goes away while steering, the sticks are centred at once.
 * A pad at rest does not fight other sources: sticks inside the deadzone are
   not written (one zero is written when they come back to the centre).
+* One pilot at a time: the pad is the pilot's control at the GCS machine and
+  steers (sticks, altitude, scale, guidance, resume) only while ``may_steer()``
+  says so; ``gcs demo``/``gcs run`` allow it while no browser holds control
+  (web/README.md). Taking control in a browser silences the pad and centres
+  sticks it held deflected; the abort button works always, as in every browser.
 """
 
 from __future__ import annotations
@@ -115,25 +120,41 @@ class GamepadMapper:
         config: the mapping.
         operator: where the commands go.
         clock: the loop's clock.
-        on_abort: called when the abort button is pressed.
+        on_abort: called when the abort button is pressed (whoever holds control).
         on_resume: called when the resume button (if mapped) is pressed.
+        may_steer: whether the pad may steer now (default: always).
     """
 
     def __init__(self, config: GamepadConfig, operator: OperatorCommand, clock: Clock, *,
                  on_abort: Callable[[], None],
-                 on_resume: Callable[[], None] = lambda: None) -> None:
+                 on_resume: Callable[[], None] = lambda: None,
+                 may_steer: Callable[[], bool] = lambda: True) -> None:
         self.config = config
         self._operator = operator
         self._clock = clock
         self._on_abort = on_abort
         self._on_resume = on_resume
+        self._may_steer = may_steer
         self._active = False
+
+    def _steers(self) -> bool:
+        """True if the pad may steer; centres the sticks it held when it just lost the right."""
+        if self._may_steer():
+            return True
+        if self._active:
+            now = self._clock.now()
+            if self._operator.snapshot(now).source == SOURCE:  # not the new pilot's sticks
+                self._operator.release(now=now, source=f"{SOURCE} silenced")
+            self._active = False
+        return False
 
     def _centred(self, value: float) -> float:
         return 0.0 if abs(value) <= self.config.deadzone else value
 
     def axes(self, axes: Sequence[float], dt: float) -> None:
-        """Apply the axes held for ``dt`` seconds."""
+        """Apply the axes held for ``dt`` seconds (nothing while the pad may not steer)."""
+        if not self._steers():
+            return
         a = self.config.axes
         now = self._clock.now()
         sticks = tuple(self._centred(m.read(axes)) for m in (a.forward, a.right, a.rotate))
@@ -146,10 +167,12 @@ class GamepadMapper:
             self._operator.set_altitude(target + climb * self.config.altitude_rate * dt, now=now)
 
     def button(self, number: int) -> None:
-        """Act on a button press."""
+        """Act on a button press (only the abort while the pad may not steer)."""
         b = self.config.buttons
         if number == b.abort:
             self._on_abort()
+        elif not self._steers():
+            return
         elif number == b.resume:
             self._on_resume()
         elif number == b.scale_up:
@@ -180,13 +203,15 @@ class Gamepad:
         clock: the loop's clock.
         on_abort: called when the abort button is pressed (on the pad's thread).
         on_resume: called when the resume button (if mapped) is pressed (same thread).
+        may_steer: whether the pad may steer now (asked on the pad's thread).
     """
 
     def __init__(self, config: GamepadConfig, operator: OperatorCommand, clock: Clock, *,
                  on_abort: Callable[[], None],
-                 on_resume: Callable[[], None] = lambda: None) -> None:
+                 on_resume: Callable[[], None] = lambda: None,
+                 may_steer: Callable[[], bool] = lambda: True) -> None:
         self.mapper = GamepadMapper(config, operator, clock, on_abort=on_abort,
-                                    on_resume=on_resume)
+                                    on_resume=on_resume, may_steer=may_steer)
         self._config = config
         self._stop = threading.Event()
         self._ready = threading.Event()

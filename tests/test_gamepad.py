@@ -22,6 +22,7 @@ from gcs.config import OperatorConfig, load_team
 from gcs.gamepad import Gamepad, GamepadConfig, GamepadMapper, load_gamepad_config
 from gcs.operator import OperatorCommand
 from gcs.typed_config import ConfigError, from_mapping
+from web.control import ControlLock
 
 ROOT = Path(__file__).resolve().parents[1]
 MAPPING = ROOT / "configs" / "gamepad.yaml"
@@ -109,6 +110,37 @@ def test_buttons_scale_switch_guidance_and_abort() -> None:
     assert not aborts
     pad.button(1)
     assert len(aborts) == 1
+
+
+def test_the_pad_steers_only_while_no_browser_holds_control() -> None:
+    """One pilot at a time: a viewer holding control silences the pad, except its abort."""
+    op, clock = operator()
+    lock = ControlLock()
+    aborts: list[float] = []
+    pad = GamepadMapper(mapping(), op, clock, on_abort=lambda: aborts.append(clock.now()),
+                        may_steer=lambda: lock.holder is None)
+    pad.axes([0.0, 0.0, 0.0, 0.0, -1.0, 0.0], dt=0.02)  # forward, nobody in a browser holds
+    assert op.snapshot(clock.now()).demand.forward == pytest.approx(1.0)
+
+    lock.take(3)  # a viewer takes control while the pad is deflected: centred at once
+    pad.axes([0.0, 0.0, 0.0, 0.0, -1.0, 0.0], dt=0.02)
+    snap = op.snapshot(clock.now())
+    assert snap.demand.forward == 0.0 and snap.source == "gamepad silenced"
+    op.set_sticks(0.0, 0.5, 0.0, now=clock.now(), source="browser#3")
+    for _ in range(5):  # neither its sticks, altitude, scale nor guidance switch act now
+        pad.axes([0.7, -1.0, 0.0, 0.0, -1.0, 0.0], dt=0.02)
+    for button in (5, 6):
+        pad.button(button)
+    snap = op.snapshot(clock.now())
+    assert snap.source == "browser#3" and snap.demand.forward == 0.0 and snap.demand.right > 0.4
+    assert snap.altitude_target == 0.0 and snap.scale_target == 1.0 and snap.guidance_on
+    pad.button(1)  # ... but its abort does, as any viewer's
+    assert len(aborts) == 1
+
+    lock.release(3)  # the viewer lets go: the pad steers again
+    pad.axes([0.0, 0.0, 0.0, 1.0, 0.0, 0.0], dt=0.02)
+    assert op.snapshot(clock.now()).source == "gamepad"
+    assert op.snapshot(clock.now()).demand.right == pytest.approx(1.0)
 
 
 def test_the_resume_button_is_optional_and_has_its_own_number() -> None:

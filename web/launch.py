@@ -38,8 +38,12 @@ def _say(text: str) -> None:
     print(text, flush=True)
 
 
-def _start_gamepad(app: GcsApp, mapping: Path | None) -> Gamepad | None:
-    """The gamepad reader, or None (with a line saying why) when there is none to run."""
+def _start_gamepad(app: GcsApp, mapping: Path | None,
+                   may_steer: Callable[[], bool]) -> Gamepad | None:
+    """The gamepad reader, or None (with a line saying why) when there is none to run.
+
+    ``may_steer`` says when the pad may steer: while no browser holds control.
+    """
     path = mapping if mapping is not None else DEFAULT_GAMEPAD
     if mapping is None and not path.is_file():
         _say(f"gamepad: off ({path} not found)")
@@ -55,13 +59,14 @@ def _start_gamepad(app: GcsApp, mapping: Path | None) -> Gamepad | None:
         return run
 
     pad = Gamepad(config, app.operator, app.clock, on_abort=request(Action.ABORT),
-                  on_resume=request(Action.RESUME))
+                  on_resume=request(Action.RESUME), may_steer=may_steer)
     try:
         pad.start()
     except RuntimeError as exc:
         _say(f"{exc}: gamepad off")
         return None
-    _say(f"gamepad: mapping {path}; plug a pad in at any time")
+    _say(f"gamepad: mapping {path}; plug a pad in at any time (it steers while no browser "
+         "holds control)")
     return pad
 
 
@@ -84,7 +89,8 @@ def serve(app: GcsApp, *, host: str, port: int, gamepad: Path | None, no_gamepad
         app.start()
         ui.start()
         if not no_gamepad:
-            pad = _start_gamepad(app, gamepad)
+            pad = _start_gamepad(app, gamepad,
+                                 may_steer=lambda: not ui.browser_holds_control())
         _say(f"GCS page: {ui.url}  (Ctrl-C to stop)")
         while alive():
             time.sleep(0.5)

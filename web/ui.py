@@ -123,6 +123,10 @@ class WebUi:
         """Where to point a browser."""
         return page_url(self.host, self.server)
 
+    def browser_holds_control(self) -> bool:
+        """True while a viewer holds control (then the gamepad may not steer)."""
+        return self._lock.holder is not None
+
     def start(self) -> None:
         """Start drawing (the server is already serving)."""
         self._thread.start()
