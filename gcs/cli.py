@@ -93,10 +93,17 @@ def _cmd_report(args: argparse.Namespace) -> int:
     except LogError as exc:
         print(f"gcs report: error: {exc}", file=sys.stderr)
         return 2
+    except OSError as exc:
+        print(f"gcs report: error: {_os_error(exc, path)}", file=sys.stderr)
+        return 2
     finally:
         for bar in bars.values():
             bar.close()
-    summary = write_report(log, out)
+    try:
+        summary = write_report(log, out)
+    except OSError as exc:
+        print(f"gcs report: error: {_os_error(exc, out)}", file=sys.stderr)
+        return 2
     if args.json:
         print(json.dumps(summary))
     else:
@@ -104,10 +111,17 @@ def _cmd_report(args: argparse.Namespace) -> int:
               f"summary.json, summary.md")
         for line in log.missing:
             print(f"missing: {line}")
-        if log.index.truncated or log.index.skipped_bytes:
-            print(f"note: truncated={log.index.truncated}, "
-                  f"corrupt bytes skipped={log.index.skipped_bytes}")
+        ix = log.index
+        if ix.truncated or ix.skipped_bytes or ix.unknown_frames or ix.rejected_times:
+            print(f"note: truncated={ix.truncated}, corrupt bytes skipped={ix.skipped_bytes}, "
+                  f"unknown frames skipped={ix.unknown_frames}, "
+                  f"records with a damaged timestamp rejected={ix.rejected_times}")
     return 0
+
+
+def _os_error(exc: OSError, path: object) -> str:
+    """``FILE: cannot read/write (reason)`` in one line, whichever file the error names."""
+    return f"{exc.filename or path}: {exc.strerror or exc}"
 
 
 def _default_team() -> str:
@@ -148,8 +162,11 @@ def _cmd_replay(args: argparse.Namespace) -> int:
 
     try:
         return run_replay(args.file, host=args.host, port=args.port)
-    except (LogError, OSError) as exc:
+    except LogError as exc:
         print(f"gcs replay: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(f"gcs replay: error: {_os_error(exc, args.file)}", file=sys.stderr)
         return 2
 
 

@@ -1,31 +1,37 @@
 """Random access to .tlog files of any length: index once, decode only what is asked.
 
-One pass over the file (memory-mapped) records, per record, its timestamp,
-offset, length, message id, system id and sequence number in compact numpy
-arrays (about 30 bytes a message), without decoding any payload. Replay and
-reports then decode only the messages of the types and the time window they
-need. Corrupt stretches are skipped by resynchronising on the next plausible
-record and counted; a truncated tail is reported, never fatal.
+One compiled pass over the file (memory-mapped, :mod:`gcs.logscan`) records,
+per record, its timestamp, offset, length, message id, system id, component id
+and sequence number in numpy columns (about 30 bytes a message), without
+decoding any payload. Replay and reports then decode only the messages of the
+types and the time window they need.
+
+Only frames whose checksum (with their type's CRC_EXTRA) holds enter the
+index, so a corrupt stretch never invents systems or messages: where no
+checked record starts, the reader moves on by one byte and counts it as
+skipped; a frame of a type the dialect does not know cannot be checked and is
+stepped over whole and counted. The recorder's timestamps are not
+checksummed: a record whose time jumps far from its neighbours' is a damaged
+stamp, rejected and counted. A truncated tail is reported, never fatal.
 """
 
 from __future__ import annotations
 
 import mmap
-import struct
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from gcs.link.dialect import MavMessage, mavlink
+from gcs.logscan import scan_buffer
 
 __all__ = ["LogError", "TlogIndex"]
 
-_STAMP = struct.Struct(">Q")
-_V2, _V1 = 0xFD, 0xFE
-#: Timestamps outside [2000, 2100) are not timestamps: the reader is out of step.
-_T_MIN, _T_MAX = 946_684_800_000_000, 4_102_444_800_000_000
+#: A record more than this away from its neighbours' times has a damaged stamp, s.
+TIME_JUMP_S = 2.0
+_NEIGHBOURS = 4  # records each side whose median time a suspect record is judged by
 
 
 class LogError(ValueError):
@@ -39,12 +45,15 @@ class TlogIndex:
     path: Path
     t: np.ndarray  # (N,) float64 Unix time, s
     offset: np.ndarray  # (N,) int64 offset of the frame (after its timestamp)
-    length: np.ndarray  # (N,) int32 frame length
+    length: np.ndarray  # (N,) uint16 frame length
     msgid: np.ndarray  # (N,) int32
-    sysid: np.ndarray  # (N,) int16
-    seq: np.ndarray  # (N,) int16
+    sysid: np.ndarray  # (N,) uint8
+    compid: np.ndarray  # (N,) uint8
+    seq: np.ndarray  # (N,) uint8
     skipped_bytes: int
     truncated: bool
+    unknown_frames: int = 0  # frames of message types the dialect does not know
+    rejected_times: int = 0  # checked frames dropped for a damaged timestamp
 
     @classmethod
     def build(cls, path: str | Path,
@@ -53,55 +62,30 @@ class TlogIndex:
         path = Path(path)
         try:
             size = path.stat().st_size
+            if size == 0:
+                raise LogError(f"{path}: empty file: no MAVLink messages")
+            with path.open("rb") as fh, mmap.mmap(fh.fileno(), 0,
+                                                 access=mmap.ACCESS_READ) as mm:
+                buf = np.frombuffer(mm, dtype=np.uint8)
+                try:
+                    scan = scan_buffer(buf, progress)
+                finally:
+                    del buf  # the mmap cannot close while a view of it lives
         except OSError as exc:
-            raise LogError(f"{path}: cannot read file ({exc.strerror})") from None
-        if size == 0:
-            raise LogError(f"{path}: empty file: no MAVLink messages")
-        cols: dict[str, list[int]] = {k: [] for k in ("t", "off", "len", "id", "sys", "seq")}
-        skipped = 0
-        truncated = False
-        with path.open("rb") as fh, mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as mm:
-            pos = 0
-            next_report = 0
-            while pos + 8 < size:
-                if progress is not None and pos >= next_report:
-                    progress(pos, size)
-                    next_report = pos + (1 << 20)
-                stamp = _STAMP.unpack_from(mm, pos)[0]
-                frame_len = _frame_length(mm, pos + 8, size)
-                if frame_len is None or not _T_MIN <= stamp < _T_MAX:
-                    pos += 1
-                    skipped += 1
-                    continue
-                if frame_len < 0:  # runs past the end of the file
-                    truncated = True
-                    break
-                start = pos + 8
-                v2 = mm[start] == _V2
-                cols["t"].append(stamp)
-                cols["off"].append(start)
-                cols["len"].append(frame_len)
-                if v2:
-                    cols["id"].append(mm[start + 7] | mm[start + 8] << 8 | mm[start + 9] << 16)
-                    cols["sys"].append(mm[start + 5])
-                    cols["seq"].append(mm[start + 4])
-                else:
-                    cols["id"].append(mm[start + 5])
-                    cols["sys"].append(mm[start + 3])
-                    cols["seq"].append(mm[start + 2])
-                pos = start + frame_len
-            truncated = truncated or 0 < size - pos <= 8  # a timestamp with no frame
+            raise LogError(f"{path}: cannot read file ({exc.strerror or exc})") from None
         if progress is not None:
             progress(size, size)
-        if not cols["t"]:
+        cols = scan.columns
+        keep = ~_time_jumps(cols["t_us"] * 1e-6)
+        if not keep.any():
             raise LogError(f"{path}: no MAVLink messages found ({size} bytes)")
-        return cls(path=path, t=np.array(cols["t"], dtype=np.float64) * 1e-6,
-                   offset=np.array(cols["off"], dtype=np.int64),
-                   length=np.array(cols["len"], dtype=np.int32),
-                   msgid=np.array(cols["id"], dtype=np.int32),
-                   sysid=np.array(cols["sys"], dtype=np.int16),
-                   seq=np.array(cols["seq"], dtype=np.int16), skipped_bytes=skipped,
-                   truncated=truncated)
+        if not keep.all():
+            cols = {k: v[keep] for k, v in cols.items()}
+        return cls(path=path, t=cols["t_us"] * 1e-6, offset=cols["offset"],
+                   length=cols["length"], msgid=cols["msgid"], sysid=cols["sysid"],
+                   compid=cols["compid"], seq=cols["seq"], skipped_bytes=scan.skipped_bytes,
+                   truncated=scan.truncated, unknown_frames=scan.unknown_frames,
+                   rejected_times=int(len(keep) - keep.sum()))
 
     def __len__(self) -> int:
         return len(self.t)
@@ -131,14 +115,22 @@ class TlogIndex:
                     continue
                 yield float(self.t[r]), msg
 
-    def packets_lost(self, sysid: int) -> int:
-        """Frames missing from ``sysid``'s sequence numbers (first component seen)."""
-        recs = np.flatnonzero(self.sysid == sysid)
-        if len(recs) < 2:
-            return 0
-        seq = self.seq[recs].astype(np.int64)
+    def streams_lost(self, systems: Iterable[int]) -> dict[tuple[int, int], int]:
+        """Frames missing from the sequence numbers of each (system, component) of ``systems``.
+
+        Every component numbers its frames on its own, so a gimbal beside an
+        autopilot is a second stream, not a jump in the first. A "gap" of more
+        than half the counter is a reordering or a restart, not a loss.
+        """
+        recs = np.flatnonzero(np.isin(self.sysid, list(systems)))
+        stream = self.sysid[recs].astype(np.int64) << 8 | self.compid[recs]
+        order = np.argsort(stream, kind="stable")  # each stream's frames in file order
+        stream, seq = stream[order], self.seq[recs][order].astype(np.int64)
         gaps = (np.diff(seq) - 1) % 256
-        return int(gaps[gaps < 128].sum())  # a huge "gap" is a reordering or a restart
+        gaps[(np.diff(stream) != 0) | (gaps >= 128)] = 0  # a gap belongs to its later frame
+        keys, group = np.unique(stream, return_inverse=True)
+        lost = np.bincount(group[1:], weights=gaps, minlength=len(keys))
+        return {(int(k) >> 8, int(k) & 0xFF): int(n) for k, n in zip(keys, lost, strict=True)}
 
 
 def _msg_id(name: str) -> int:
@@ -148,15 +140,20 @@ def _msg_id(name: str) -> int:
     return value
 
 
-def _frame_length(mm: mmap.mmap, start: int, size: int) -> int | None:
-    """Length of the frame at ``start``; None if no frame starts there, -1 if cut short."""
-    if start + 3 > size:
-        return -1
-    magic = mm[start]
-    if magic == _V2:
-        length = 10 + mm[start + 1] + 2 + (13 if mm[start + 2] & 0x01 else 0)
-    elif magic == _V1:
-        length = 6 + mm[start + 1] + 2
-    else:
-        return None
-    return length if start + length <= size else -1
+def _time_jumps(t: np.ndarray) -> np.ndarray:
+    """Records whose time is damaged: far from both neighbours and from their median.
+
+    A real gap in a log (a pause) has neighbours on both sides that agree with
+    one record or the other, and within a run of records the median of the
+    neighbours is the record's own time; a stamp with a flipped high byte is
+    far from all of them. Only suspects (far from both neighbours) are judged.
+    """
+    bad = np.zeros(len(t), dtype=bool)
+    if len(t) < 3:
+        return bad
+    step = np.abs(np.diff(t)) > TIME_JUMP_S
+    suspects = np.flatnonzero(np.r_[step[0], step[:-1] & step[1:], step[-1]])
+    for k in suspects:
+        around = np.r_[t[max(k - _NEIGHBOURS, 0) : k], t[k + 1 : k + 1 + _NEIGHBOURS]]
+        bad[k] = abs(t[k] - np.median(around)) > TIME_JUMP_S
+    return bad

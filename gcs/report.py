@@ -5,10 +5,12 @@
 * ``trajectories.png``: top view of the vehicles' (and the payload's) paths,
   like the paper's trajectory plot;
 * ``distance_errors.png``: the distance error of every edge, phases shaded;
-* ``accelerations.png``: commanded accelerations against the limits;
+* ``accelerations.png``: commanded accelerations against the limits: the norm
+  against the norm limit (top), each axis against the per-axis limit (bottom);
 * ``summary.json`` and ``summary.md``: duration, worst distance error overall and
-  per phase, worst swing, worst bank, rope tensions, link losses, events, and
-  what the log does not contain.
+  per phase, worst swing, worst bank, rope tensions, link losses of what the
+  vehicles sent (per system and component), events, what the log does not
+  contain and how much of it could not be read.
 
 The summary's metrics come from :meth:`FlightLog.metrics`, the same code that
 ``gcs fly`` runs live, so both agree for the same flight.
@@ -110,6 +112,8 @@ def _trajectories(log: FlightLog) -> plt.Figure | None:
         return None
     fig, ax = plt.subplots(figsize=(7, 7))
     for sysid, tr in sorted(log.tracks.items()):
+        if not len(tr.t):
+            continue
         ax.plot(tr.p_ned[:, 1], tr.p_ned[:, 0], lw=1, label=f"vehicle {sysid}")
         ax.plot(tr.p_ned[-1, 1], tr.p_ned[-1, 0], "o", ms=4, color=ax.lines[-1].get_color())
     if "payload" in log.arrays:
@@ -146,24 +150,27 @@ def _distance_errors(log: FlightLog) -> plt.Figure | None:
 
 
 def _accelerations(log: FlightLog) -> plt.Figure | None:
-    if "acc_cmd" not in log.arrays:
+    if "acc_cmd" not in log.arrays or not len(log.tick_t):
         return None
-    t0 = _t0(log)
-    n = log.n_vehicles
-    acc = log.arrays["acc_cmd"][:, : 2 * n].reshape(len(log.tick_t), n, 2)
-    fig, ax = plt.subplots(figsize=(10, 4))
-    ids = log.team["ids"] if log.team is not None else tuple(range(1, n + 1))
-    for i in range(n):
-        ax.plot(log.tick_t - t0, np.linalg.norm(acc[:, i], axis=1), lw=1,
-                label=f"|a| {ids[i]}")  # type: ignore[index]
+    t = log.tick_t - _t0(log)
+    acc = log.per_vehicle("acc_cmd", 2)
+    ids = log.team["ids"] if log.team is not None else tuple(range(1, log.n_vehicles + 1))
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(10, 6), sharex=True)
+    for i, vid in enumerate(ids):  # type: ignore[arg-type]
+        line = top.plot(t, np.linalg.norm(acc[:, i], axis=1), lw=1, label=f"|a| {vid}")[0]
+        bottom.plot(t, acc[:, i, 0], lw=1, color=line.get_color(), label=f"{vid} x")
+        bottom.plot(t, acc[:, i, 1], lw=1, ls=":", color=line.get_color(), label=f"{vid} y")
     if log.team is not None:
-        ax.axhline(float(log.team["accel_norm"]), color="r", ls="--", lw=1, label="norm limit")
-        ax.axhline(float(log.team["accel_axis"]), color="m", ls=":", lw=1,
-                   label="per-axis limit")
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("commanded acceleration [m/s^2]")
-    ax.legend(ncol=4, fontsize=7)
-    ax.set_title("Commanded horizontal accelerations against the limits")
+        top.axhline(float(log.team["accel_norm"]), color="r", ls="--", lw=1, label="norm limit")
+        for sign in (1.0, -1.0):
+            bottom.axhline(sign * float(log.team["accel_axis"]), color="m", ls="--", lw=1,
+                           label="per-axis limit" if sign > 0 else None)
+    top.set_ylabel("|a| [m/s^2]")
+    bottom.set_ylabel("a per axis [m/s^2] (x solid, y dotted)")
+    bottom.set_xlabel("time [s]")
+    top.legend(ncol=5, fontsize=7)
+    bottom.legend(ncol=5, fontsize=7)
+    fig.suptitle("Commanded horizontal accelerations against the limits")
     fig.tight_layout()
     return fig
 
@@ -175,10 +182,12 @@ def _summary(log: FlightLog, figures: list[str]) -> dict[str, object]:
         "log": str(log.index.path),
         "messages": len(log.index),
         "corrupt_bytes_skipped": log.index.skipped_bytes,
+        "unknown_frames_skipped": log.index.unknown_frames,
+        "bad_timestamps_rejected": log.index.rejected_times,
         "truncated": log.index.truncated,
         "vehicles": sorted(log.tracks),
         "metrics": metrics,
-        "link_losses": {str(s): log.index.packets_lost(s) for s in log.index.systems()},
+        "link_losses": {f"{s}/{c}": n for (s, c), n in sorted(log.link_losses().items())},
         "phases": [{"t_s": round(t - t0, 2), "phase": p} for t, p in log.phase_changes()],
         "events": [{"t_s": round(t - t0, 2), "system": s, "severity": sev, "text": txt}
                    for t, s, sev, txt in log.texts],
@@ -199,7 +208,12 @@ def _markdown(s: dict[str, object]) -> str:
         lines += ["", "Worst distance error per phase (m):", ""]
         for phase, value in m.get("worst_distance_error_by_phase_m", {}).items():  # type: ignore[union-attr]
             lines.append(f"- {phase}: {value}")
-    lines += ["", f"Link losses (frames missing by sequence number): {s['link_losses']}", ""]
+    lines += ["", "Link losses (frames the vehicles sent that did not arrive, by sequence "
+                  f"number, per system/component): {s['link_losses']}", "",
+              f"Unreadable: {s['corrupt_bytes_skipped']} corrupt bytes skipped, "
+              f"{s['unknown_frames_skipped']} frames of unknown types, "
+              f"{s['bad_timestamps_rejected']} records with a damaged timestamp; "
+              f"truncated: {s['truncated']}", ""]
     if s["missing"]:
         lines += ["Not in this log:", ""] + [f"- {x}" for x in s["missing"]]  # type: ignore[union-attr]
     lines += ["", "Figures: " + ", ".join(s["figures"])]  # type: ignore[arg-type]

@@ -27,8 +27,11 @@ __all__ = [
     "Px4AutoSubMode",
     "Px4MainMode",
     "SimMode",
+    "copter_mode_text",
+    "heartbeat_mode_text",
     "px4_custom_mode",
     "px4_mode_text",
+    "sim_mode_text",
     "split_px4_custom_mode",
 ]
 
@@ -143,3 +146,32 @@ class CopterMode(IntEnum):
     def text(self) -> str:
         """Name as ArduPilot's ground stations show it."""
         return self.name.replace("_", " ").title()
+
+
+def copter_mode_text(custom_mode: int) -> str:
+    """ArduCopter mode name such as ``GUIDED``."""
+    try:
+        return CopterMode(custom_mode).name
+    except ValueError:
+        return f"Copter mode {custom_mode}"
+
+
+def sim_mode_text(custom_mode: int) -> str:
+    """:class:`SimMode` name."""
+    try:
+        return SimMode(custom_mode).name
+    except ValueError:
+        return f"sim mode {custom_mode}"
+
+
+def heartbeat_mode_text(autopilot: int, custom_mode: int) -> str:
+    """Mode name of a HEARTBEAT whose profile is not known (a recorded log).
+
+    The ``MAV_AUTOPILOT`` field picks the names: ArduPilot's and PX4's, and the
+    simulated vehicles' for a generic autopilot (the only generic one we fly).
+    """
+    if autopilot == mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA:
+        return copter_mode_text(custom_mode)
+    if autopilot == mavlink.MAV_AUTOPILOT_PX4:
+        return px4_mode_text(custom_mode)
+    return sim_mode_text(custom_mode)

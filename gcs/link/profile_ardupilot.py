@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 from gcs.link.dialect import mavlink
 from gcs.link.link import Link
-from gcs.link.modes import CopterMode
+from gcs.link.modes import CopterMode, copter_mode_text
 from gcs.link.profile import ProfileBase, ProfileName
 from gcs.link.setpoints import SetpointKind
 from gcs.typed_config import field
@@ -78,10 +78,7 @@ class ArduPilotProfile(ProfileBase):
 
     def _mode_name(self, custom_mode: int) -> str:
         """ArduCopter mode name such as ``GUIDED``."""
-        try:
-            return CopterMode(custom_mode).name
-        except ValueError:
-            return f"Copter mode {custom_mode}"
+        return copter_mode_text(custom_mode)
 
     def takeoff(self, *, altitude_m: float) -> None:
         """GUIDED, arm, then NAV_TAKEOFF to ``altitude_m`` above home."""

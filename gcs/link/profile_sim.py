@@ -13,7 +13,7 @@ Sequence, every step acknowledged and confirmed by the HEARTBEAT:
 from __future__ import annotations
 
 from gcs.link.dialect import mavlink
-from gcs.link.modes import SimMode
+from gcs.link.modes import SimMode, sim_mode_text
 from gcs.link.profile import ProfileBase, ProfileName
 from gcs.link.setpoints import SetpointKind
 
@@ -40,10 +40,7 @@ class SimProfile(ProfileBase):
 
     def _mode_name(self, custom_mode: int) -> str:
         """:class:`SimMode` name."""
-        try:
-            return SimMode(custom_mode).name
-        except ValueError:
-            return f"sim mode {custom_mode}"
+        return sim_mode_text(custom_mode)
 
     def takeoff(self, *, altitude_m: float) -> None:
         """Arm, then NAV_TAKEOFF(param7 = ``altitude_m``); confirmed by TAKEOFF or HOLD."""
