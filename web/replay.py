@@ -7,8 +7,10 @@ scene code unchanged. It is stateless: the state at ``t`` depends on ``t`` only,
 so scrubbing backwards is as exact as playing forwards.
 
 Vehicle states are the latest recorded sample at or before ``t`` (not
-interpolated: what is drawn is what was received); guidance internals are
-those of the latest tick at or before ``t``.
+interpolated: what is drawn is what was received), mode, armed and battery
+included, so the live page's vehicle states (ok, stale, holding, landing) come
+out of the same code; guidance internals are those of the latest tick at or
+before ``t``.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gcs.fleet import FleetState
-from gcs.flightlog import FlightLog
+from gcs.flightlog import FlightLog, Track
 from gcs.phases import Phase
 from gcs.simtruth import SimTruth
 from web.frame import TeamView
@@ -30,6 +32,7 @@ DEFAULT_ROPE_LENGTH = 1.0
 """Rope length assumed when drawing a payload the log does not hold, m."""
 
 _WARNING = 4  # MAV_SEVERITY_WARNING: this and more severe (lower) are warnings
+_PHASE_TEXTS = frozenset(f"phase: {p.text}" for p in Phase)  # what the runtime writes
 
 
 @dataclass(frozen=True)
@@ -86,10 +89,7 @@ class ReplayCursor:
         ends += [e[0] for e in log.texts]
         self.start = float(min(starts)) if starts else 0.0
         self.end = float(max(ends)) if ends else self.start
-        events = [ReplayEvent(t, "phase", f"phase: {name}") for t, name in log.phase_changes()]
-        events += [ReplayEvent(t, "warning" if sev <= _WARNING else "text",
-                               f"{sysid}: {text}") for t, sysid, sev, text in log.texts]
-        self.events = sorted(events, key=lambda e: e.t)
+        self.events = _events(log)
         self._event_t = np.array([e.t for e in self.events])
 
     @property
@@ -104,6 +104,10 @@ class ReplayCursor:
         yaw = np.zeros(n)
         tilt = np.full(n, np.nan)
         age = np.full(n, np.inf)
+        hb_age = np.full(n, np.inf)
+        armed = np.zeros(n, dtype=bool)
+        battery = np.full(n, np.nan)
+        modes = ["unknown"] * n  # as the live table before a vehicle's first HEARTBEAT
         for i, vid in enumerate(self.ids):
             track = self.log.tracks.get(vid)
             if track is None:
@@ -116,9 +120,13 @@ class ReplayCursor:
             if j >= 0:
                 roll, pitch, yaw[i] = track.rpy[j]
                 tilt[i] = math.acos(max(-1.0, min(1.0, math.cos(roll) * math.cos(pitch))))
+            hb_age[i], armed[i], modes[i] = _heartbeat(track, t)
+            b = _latest(track.battery_t, t)
+            if b >= 0:
+                battery[i] = track.battery[b]
         return FleetState(t=t, ids=self.ids, p_ned=p, v_ned=v, yaw=yaw, tilt=tilt, age=age,
-                          heartbeat_age=age.copy(), armed=np.zeros(n, dtype=bool),
-                          battery=np.full(n, np.nan), modes=("",) * n)
+                          heartbeat_age=hb_age, armed=armed, battery=battery,
+                          modes=tuple(modes))
 
     def tick(self, t: float) -> int:
         """Index of the latest guidance tick at or before ``t`` (-1: none)."""
@@ -153,6 +161,29 @@ class ReplayCursor:
                         payload_p_ned=tuple(float(x) for x in payload[:3]),  # type: ignore[arg-type]
                         payload_v_ned=tuple(float(x) for x in payload[3:6]),  # type: ignore[arg-type]
                         rope_tension=tuple(float(x) for x in rope[:n]))
+
+
+def _heartbeat(track: Track, t: float) -> tuple[float, bool, str]:
+    """(age, armed, mode) of the latest HEARTBEAT at or before ``t``."""
+    k = _latest(track.hb_t, t)
+    if k < 0:
+        return math.inf, False, "unknown"
+    return t - float(track.hb_t[k]), bool(track.armed[k]), track.mode(k)
+
+
+def _events(log: FlightLog) -> list[ReplayEvent]:
+    """Phase changes (from the ticks) and texts, oldest first, each phase change once.
+
+    The GCS also writes each phase change as a text; where the ticks are
+    recorded, those texts are left out (the tick's moment is the one whose
+    state the page then shows).
+    """
+    events = [ReplayEvent(t, "phase", f"phase: {name}") for t, name in log.phase_changes()]
+    ticks = len(log.tick_t) > 0
+    events += [ReplayEvent(t, "warning" if sev <= _WARNING else "text", f"{sysid}: {text}")
+               for t, sysid, sev, text in log.texts
+               if not (ticks and sysid == log.gcs_sysid and text in _PHASE_TEXTS)]
+    return sorted(events, key=lambda e: e.t)
 
 
 def _desired_shape(cursor: ReplayCursor, edges: np.ndarray, distances: np.ndarray) -> np.ndarray:

@@ -20,13 +20,13 @@ import numpy as np
 import viser
 
 from gcs.flightlog import FlightLog
-from web.frame import build_frame, vehicle_states
+from web.frame import build_frame
 from web.history import History
-from web.palette import VehicleState, state_colors
 from web.plots import PlotsView
 from web.quadmesh import quad_mesh
 from web.replay import ReplayCursor, ReplayState, replay_view
 from web.scene import SceneView
+from web.status import vehicle_table_html
 from web.timeline import SPEEDS, Timeline
 from web.trails import Trails
 from web.ui import page_url
@@ -75,23 +75,14 @@ def replay_summary_html(state: ReplayState, *, start: float, name: str,
 
 
 def _vehicles_html(state: ReplayState, stale_after: float) -> str:
+    """The live page's vehicles table at the replayed moment (rope tension: simulation only,
+    the airframe's mass that the live estimate needs is not recorded)."""
     f = state.fleet
-    states = vehicle_states(f, stale_after)
-    colors = state_colors(states)
-    tension = state.truth.rope_tension if state.truth is not None else (math.nan,) * f.n
-    rows = []
-    for i, vid in enumerate(f.ids):
-        r, g, b = (int(c) for c in colors[i])
-        cells = (f"<b>{vid}</b>", f'<span style="color:rgb({r},{g},{b})">&#9679;</span> '
-                 f"{VehicleState(states[i]).text}",
-                 _num(math.degrees(float(f.tilt[i])), ".1f"), _num(-float(f.p_ned[i, 2]), ".2f"),
-                 _num(float(np.linalg.norm(f.v_ned[i])), ".2f"), _num(float(tension[i]), ".2f"))
-        rows.append(f'<tr data-gcs="vehicle-{vid}">' + "".join(
-            f'<td style="padding:1px 5px;text-align:right">{c}</td>' for c in cells) + "</tr>")
-    head = "".join(f'<th style="padding:1px 5px;color:#607d8b">{h}</th>'
-                   for h in ("id", "state", "tilt °", "alt m", "speed m/s", "rope N (sim)"))
-    return (f'<table style="border-collapse:collapse;font-size:0.8em;margin:0 4px">'
-            f'<tr>{head}</tr>{"".join(rows)}</table>')
+    truth = state.truth
+    rope = np.array([truth.rope_tension[truth.ids.index(vid)] for vid in f.ids]) \
+        if truth is not None and set(truth.ids) >= set(f.ids) else np.full(f.n, np.nan)
+    return vehicle_table_html(f, stale_after=stale_after, rope=rope, rope_head="rope N (sim)",
+                              health={}, heartbeat_age=f.heartbeat_age)
 
 
 def _events_html(state: ReplayState, start: float, limit: int = 10) -> str:

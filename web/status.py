@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gcs.fleet import FleetState
 from gcs.link.health import LinkHealth
 from gcs.runtime import RuntimeSnapshot, TickStats
 from gcs.simtruth import SimTruth
@@ -21,7 +22,7 @@ from web.frame import rope_pull_estimate, vehicle_states
 from web.palette import VehicleState, state_colors, tension_colors
 
 __all__ = ["UiStats", "events_html", "rope_legend", "rope_pull_estimate", "summary_html",
-           "vehicles_html"]
+           "vehicle_table_html", "vehicles_html"]
 
 _LEVEL_COLOR = {"info": "#455a64", "warning": "#e67e22", "error": "#c0392b"}
 _CELL = "padding:1px 5px;text-align:right;white-space:nowrap"
@@ -121,19 +122,34 @@ def vehicles_html(snap: RuntimeSnapshot | None, *, health: Mapping[int, LinkHeal
     if snap is None:
         return ""
     f = snap.fleet
-    states = vehicle_states(f, stale_after)
-    colors = state_colors(states)
-    pull = rope_pull_estimate(mass, f.tilt, snap.accel_cmd)
     measured = _truth_covers(truth, f.ids)
+    rope = np.array([truth.rope_tension[truth.ids.index(vid)] for vid in f.ids]) \
+        if measured and truth else rope_pull_estimate(mass, f.tilt, snap.accel_cmd)
     rope_head = "rope N (sim)" if measured else (
         '<span title="horizontal rope pull estimated from tilt (a lower bound)">'
         "rope pull ≈ N</span>")
+    return vehicle_table_html(f, stale_after=stale_after, rope=rope, rope_head=rope_head,
+                              health=health)
+
+
+def vehicle_table_html(f: FleetState, *, stale_after: float, rope: np.ndarray, rope_head: str,
+                       health: Mapping[int, LinkHealth],
+                       heartbeat_age: np.ndarray | None = None) -> str:
+    """The table of :func:`vehicles_html` from a fleet state and each vehicle's rope value.
+
+    The replay draws the live table from a log: it has no links, so the
+    recorded ``heartbeat_age`` stands in for the link's and the link's
+    counters show as unknown.
+    """
+    states = vehicle_states(f, stale_after)
+    colors = state_colors(states)
     head = ("id", "state", "mode", "armed", "batt %", "tilt °", "alt m", rope_head, "hb s",
             "lost", "refused", "rtt ms")
     rows = []
     for i, vid in enumerate(f.ids):
         h = health.get(vid)
-        rope = truth.rope_tension[truth.ids.index(vid)] if measured and truth else pull[i]
+        hb = h.heartbeat_age_s if h and h.heartbeat_age_s is not None else (
+            float(heartbeat_age[i]) if h is None and heartbeat_age is not None else math.nan)
         r, g, b = (int(c) for c in colors[i])
         cells = (
             f'<b>{vid}</b>',
@@ -144,8 +160,8 @@ def vehicles_html(snap: RuntimeSnapshot | None, *, health: Mapping[int, LinkHeal
             _num(float(f.battery[i]), ".0f"),
             _num(math.degrees(float(f.tilt[i])), ".1f"),
             _num(-float(f.p_ned[i, 2]), ".2f"),
-            _num(float(rope), ".2f"),
-            _num(h.heartbeat_age_s if h and h.heartbeat_age_s is not None else math.nan, ".1f"),
+            _num(float(rope[i]), ".2f"),
+            _num(hb, ".1f"),
             str(h.packets_lost) if h else "–",
             str(h.refused) if h else "–",
             _num(1e3 * h.rtt_s if h and h.rtt_s is not None else math.nan, ".0f"),
