@@ -204,9 +204,9 @@ def build_parser() -> argparse.ArgumentParser:
                                    "zenoh (and on UDP with --udp). Options after CONFIG go "
                                    "to the simulator (see `python -m sim --help`).")
     p.add_argument("--config", required=True, help="team config (YAML)")
-    p.add_argument("sim_args", nargs=argparse.REMAINDER,
-                   help="simulator options, e.g. --speed 2 --udp")
-    p.set_defaults(func=_cmd_sim)
+    # the simulator's options are passed on as they are (main: parse_known_args); a
+    # REMAINDER positional refused them, since they start with "--"
+    p.set_defaults(func=_cmd_sim, sim_args=[])
 
     p = sub.add_parser("fly", help="fly a scenario headless with simulated vehicles",
                        description="Starts the simulated team (or joins a running `gcs sim` "
@@ -270,7 +270,11 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``gcs`` console script."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args, rest = parser.parse_known_args(argv)
+    if args.command == "sim":
+        args.sim_args = rest  # python -m sim checks them
+    elif rest:
+        parser.error(f"unrecognized arguments: {' '.join(rest)}")
     try:
         return int(args.func(args))
     except ConfigError as exc:
