@@ -7,6 +7,8 @@ log is written by the real recorder, and `gcs replay` serves a real viser page.
 
 from __future__ import annotations
 
+import html as html_lib
+import re
 import signal
 import socket
 import subprocess
@@ -21,6 +23,7 @@ from pymavlink import mavutil
 
 from gcs.flightlog import FlightLog
 from gcs.link.encoder import MavlinkEncoder
+from gcs.link.modes import SAFETY_ARMED, SimMode
 from gcs.recorder import TlogRecorder
 from tests.conftest import run_gcs
 from web.replay import ReplayCursor
@@ -68,24 +71,83 @@ def test_replayed_positions_are_the_recorded_ones(flight: Path) -> None:
     assert cursor.log.tick_t[k] <= t < cursor.log.tick_t[k + 1]
 
 
+def _page(ui: ReplayUi) -> tuple:
+    """What the page holds: plot history, trail segments, slider, status tables."""
+    series = ui._history.series()
+    return (series, ui._trails.segments(), ui._slider.value, ui._vehicles.content,
+            ui._events.content, ui._summary.content)
+
+
 def test_scrubbing_backwards_gives_the_earlier_state(flight: Path) -> None:
     log = FlightLog.load(flight)
     ui = ReplayUi(log, port=_free_port())
+    direct = ReplayUi(log, port=_free_port())  # jumps straight to the moment, never back
     try:
         start = ui.timeline.start
         fresh = ReplayCursor(log).state(start + 5.0)  # same moment, by a cursor never moved
         ui.seek(start + 30.0)
         late = ui.cursor.state(ui.timeline.t)
+        late_page = _page(ui)
         ui.seek(start + 5.0)
         again = ui.cursor.state(ui.timeline.t)
+        back_page = _page(ui)
+        direct.seek(start + 5.0)
+        direct_page = _page(direct)
     finally:
         ui.close()
+        direct.close()
     assert late.tick > again.tick
     np.testing.assert_array_equal(again.fleet.p_ned, fresh.fleet.p_ned)
     assert again.phase == fresh.phase and again.tick == fresh.tick
     assert [e.t for e in again.events] == [e.t for e in fresh.events]
     assert len(late.events) > len(again.events)
     assert again.truth is not None  # simulation logs carry payload and ropes
+    # what the page holds after the jump back: nothing of the later 25 s
+    series, (segments, ages), slider = back_page[:3]
+    assert slider == pytest.approx(5.0)
+    assert len(series.t) > 5 and series.t[-1] <= start + 5.0
+    assert len(late_page[0].t) > len(series.t)
+    d_series, (d_segments, d_ages), _ = direct_page[:3]
+    for name in ("t", "distance", "desired", "vx", "vy"):
+        np.testing.assert_array_equal(getattr(series, name), getattr(d_series, name))
+    np.testing.assert_array_equal(segments, d_segments)
+    np.testing.assert_array_equal(ages, d_ages)
+    assert len(segments) > 0 and not np.array_equal(segments, late_page[1][0])
+    assert back_page[3:] == direct_page[3:]  # the vehicles, events and summary panels
+
+
+def test_replay_shows_mode_armed_and_battery_as_the_live_table(flight: Path) -> None:
+    raw = _raw(flight)
+    log = FlightLog.load(flight)
+    ui = ReplayUi(log, port=_free_port())
+    landing = next(t for t, name in log.phase_changes() if name == "landing")
+    seen_states = set()
+    try:
+        for t in (ui.timeline.start + 10.0, ui.timeline.start + 20.0, landing + 1.0):
+            ui.seek(t)
+            rows = dict(re.findall(r'data-gcs="vehicle-(\d)">(.*?)</tr>', ui._vehicles.content))
+            for vid in (1, 2, 3, 4):
+                cells = [html_lib.unescape(re.sub("<[^>]+>", "", c)).strip()
+                         for c in re.findall(r"<td[^>]*>(.*?)</td>", rows[str(vid)])]
+                hb = [m for m in raw if m.get_type() == "HEARTBEAT" and m._timestamp <= t
+                      and m.get_srcSystem() == vid][-1]
+                status = [m for m in raw if m.get_type() == "SYS_STATUS" and m._timestamp <= t
+                          and m.get_srcSystem() == vid][-1]
+                assert cells[2] == SimMode(hb.custom_mode).name
+                assert cells[3] == ("yes" if hb.base_mode & SAFETY_ARMED else "no")
+                assert cells[4] == f"{status.battery_remaining:.0f}"
+                assert float(cells[8]) == pytest.approx(t - hb._timestamp, abs=0.051)
+                seen_states.add(cells[1].split(" ", 1)[1])
+    finally:
+        ui.close()
+    assert seen_states == {"ok", "landing"}  # from the modes, as the live page derives them
+
+
+def test_each_phase_change_is_one_event(flight: Path) -> None:
+    cursor = ReplayCursor(FlightLog.load(flight))
+    phases = [e.text for e in cursor.events if "phase:" in e.text]
+    assert phases == [f"phase: {name}" for _, name in cursor.log.phase_changes()]
+    assert any("mode OFFBOARD" in e.text for e in cursor.events)  # other texts stay
 
 
 def test_timeline_plays_pauses_and_clamps() -> None:
