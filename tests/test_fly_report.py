@@ -12,8 +12,11 @@ import subprocess
 import sys
 from pathlib import Path
 
+import matplotlib.pyplot as plt
+import numpy as np
 import pytest
 
+from gcs import report
 from gcs.flightlog import FlightLog
 from gcs.logreader import TlogIndex
 from tests.conftest import SHORT, SQUARE, run_gcs
@@ -75,6 +78,8 @@ def test_report_matches_the_flight(short_flight: tuple[dict, Path], tmp_path: Pa
         assert r["worst_distance_error_by_phase_m"][phase] == pytest.approx(value, abs=2e-3)
     assert summary["missing"] == []
     assert summary["vehicles"] == [1, 2, 3, 4]
+    # what the vehicles sent, per system/component; the GCS's own senders are left out
+    assert summary["link_losses"] == {"1/1": 0, "2/1": 0, "3/1": 0, "4/1": 0}
 
 
 def test_truncated_log_still_reports(short_flight: tuple[dict, Path], tmp_path: Path) -> None:
@@ -89,6 +94,58 @@ def test_truncated_log_still_reports(short_flight: tuple[dict, Path], tmp_path: 
     assert "truncated=True" in out.stdout
     parsed = FlightLog.load(cut)
     assert parsed.index.truncated and len(parsed.tick_t) > 10
+
+
+def test_corrupt_log_still_reports_and_says_what_was_skipped(
+        short_flight: tuple[dict, Path], tmp_path: Path) -> None:
+    m, log = short_flight
+    data = bytearray(log.read_bytes())
+    rng = np.random.default_rng(2)
+    for k in rng.choice(len(data), 2000, replace=False):  # about one byte in 600
+        data[k] ^= int(rng.integers(1, 256))
+    bad = tmp_path / "corrupt.tlog"
+    bad.write_bytes(bytes(data))
+    out = run_gcs("report", str(bad), "--out", str(tmp_path / "r"), "--json", "--quiet")
+    assert out.returncode == 0, out.stderr
+    summary = json.loads(out.stdout)
+    r = summary["metrics"]
+    assert r["duration_s"] == pytest.approx(m["duration_s"], abs=1.0)
+    assert summary["vehicles"] == [1, 2, 3, 4]  # no systems made of damaged bytes
+    assert set(summary["link_losses"]) == {"1/1", "2/1", "3/1", "4/1"}
+    times = [p["t_s"] for p in summary["phases"]]
+    assert times == sorted(times) and times[-1] < m["duration_s"] + 1.0
+    assert set(r["phases"]) <= set(m["phases"])
+    assert summary["corrupt_bytes_skipped"] > 1000 and summary["bad_timestamps_rejected"] > 0
+    assert 0.8 * 22_000 < summary["messages"] < len(TlogIndex.build(log))
+    for name in ("formation.png", "trajectories.png", "accelerations.png"):
+        assert (tmp_path / "r" / name).stat().st_size > 1000
+    text = run_gcs("report", str(bad), "--out", str(tmp_path / "r2"), "--quiet").stdout
+    assert "corrupt bytes skipped=" in text and "damaged timestamp rejected=" in text
+
+
+def test_acceleration_limits_are_drawn_against_their_own_quantity(
+        short_flight: tuple[dict, Path]) -> None:
+    log = FlightLog.load(short_flight[1])
+    fig = report._accelerations(log)
+    assert fig is not None and log.team is not None
+    norm_ax, axis_ax = fig.axes
+
+    def levels(ax: plt.Axes) -> set[float]:  # horizontal lines: y constant over the line
+        return {round(float(y[0]), 6) for line in ax.get_lines()
+                if len(y := np.asarray(line.get_ydata(), dtype=float)) == 2 and y[0] == y[1]}
+
+    norm, per_axis = float(log.team["accel_norm"]), float(log.team["accel_axis"])
+    assert levels(norm_ax) == {round(norm, 6)}
+    assert levels(axis_ax) == {round(per_axis, 6), round(-per_axis, 6)}
+    plt.close(fig)
+
+
+def test_unreadable_files_are_refused_in_one_line(tmp_path: Path) -> None:
+    for command in ("report", "replay"):
+        out = run_gcs(command, str(tmp_path))  # a folder, not a log
+        assert out.returncode == 2, out.stderr
+        assert out.stderr.count("\n") == 1 and str(tmp_path) in out.stderr
+        assert "Traceback" not in out.stderr
 
 
 def test_empty_and_garbage_logs_are_refused_in_one_line(tmp_path: Path) -> None:
