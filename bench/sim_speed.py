@@ -8,7 +8,9 @@ default). The JIT compile (or cache load) and the take-off happen before the
 clock starts: the factors measure steady running only. The process is pinned
 to one CPU core where the OS allows it; numba runs single-threaded anyway.
 
-Prints one line per team, then one JSON object on the last line.
+Prints one line per team, then one JSON object on the last line, also when a
+team fails (refused or left OFFBOARD, take-off not done): then its factor is
+null, "error" says what happened, and the exit status is 1.
 
     python bench/sim_speed.py [--seconds 10]
 """
@@ -19,7 +21,9 @@ import argparse
 import json
 import math
 import os
+import sys
 import time
+from collections import Counter
 
 import numpy as np
 
@@ -34,9 +38,14 @@ from sim.scenario import (
 )
 from vehicles.airframe import load_airframe
 from vehicles.config import load_autopilot_config
+from vehicles.modes import Mode
 
 TARGETS = {"4+payload": 100.0, "16": None, "64": 5.0}
 """Required real-time factors (None: reported only)."""
+
+
+class BenchError(RuntimeError):
+    """A team did not fly OFFBOARD throughout, so its factor would time something else."""
 
 
 def measure(layout: Layout, sim_seconds: float, seed: int) -> tuple[float, float]:
@@ -56,9 +65,9 @@ def measure(layout: Layout, sim_seconds: float, seed: int) -> tuple[float, float
             autopilot.set_accel_xy_pos_z_setpoint(i, accel, z_hold[i])
 
     send(0.0)
-    for i in range(n):
-        if not autopilot.start_offboard(i).accepted:
-            raise RuntimeError(f"vehicle {i} refused OFFBOARD")
+    refused = [str(i) for i in range(n) if not autopilot.start_offboard(i).accepted]
+    if refused:
+        raise BenchError(f"vehicles {', '.join(refused)} refused OFFBOARD")
     chunk = 0.25
     setup = time.perf_counter() - started
     wall = time.perf_counter()
@@ -66,8 +75,12 @@ def measure(layout: Layout, sim_seconds: float, seed: int) -> tuple[float, float
         world.run(autopilot, chunk)
         send((k + 1) * chunk)
     wall = time.perf_counter() - wall
-    if any(m.name != "OFFBOARD" for m in autopilot.modes):
-        raise RuntimeError("a vehicle left OFFBOARD during the benchmark")
+    left = [(i, m.name) for i, m in enumerate(autopilot.modes) if m != Mode.OFFBOARD]
+    if left:
+        modes = Counter(mode for _, mode in left)
+        now_in = ", ".join(f"{count} in {mode}" for mode, count in modes.items())
+        raise BenchError(f"{len(left)} of {n} vehicles left OFFBOARD during the benchmark "
+                         f"({now_in}; first: vehicle {left[0][0]})")
     return sim_seconds / wall, setup
 
 
@@ -80,16 +93,26 @@ def main() -> None:
         os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
         pinned = True
     teams = {"4+payload": paper_square(), "16": ring_layout(16), "64": ring_layout(64)}
-    factors, setups = {}, {}
+    factors: dict[str, float | None] = {}
+    setups: dict[str, float] = {}
+    errors = []
     for seed, (name, layout) in enumerate(teams.items()):
-        factors[name], setups[name] = measure(layout, args.seconds, seed)
+        try:
+            factor, setups[name] = measure(layout, args.seconds, seed)
+        except RuntimeError as error:  # BenchError, or take_off's refusal or timeout
+            factors[name] = None
+            errors.append(f"{name}: {error}")
+            print(f"{name:>10}: FAILED, {error}")
+            continue
+        factors[name] = factor
         target = TARGETS[name]
-        verdict = "" if target is None else (" ok" if factors[name] >= target
+        verdict = "" if target is None else (" ok" if factor >= target
                                              else f" BELOW TARGET {target:g}x")
-        print(f"{name:>10}: {factors[name]:7.1f}x real time "
+        print(f"{name:>10}: {factor:7.1f}x real time "
               f"(setup incl. JIT {setups[name]:.1f} s, not timed){verdict}")
     print(json.dumps({
-        "real_time_factor": {k: round(v, 1) for k, v in factors.items()},
+        "real_time_factor": {k: None if v is None else round(v, 1)
+                             for k, v in factors.items()},
         "targets": {k: v for k, v in TARGETS.items() if v is not None},
         "sim_seconds": args.seconds,
         "control_rate_hz": load_autopilot_config(DEFAULT_AUTOPILOT_CONFIG).rate_hz,
@@ -97,7 +120,10 @@ def main() -> None:
         "jit_compile_excluded": True,
         "setup_seconds_incl_jit": {k: round(v, 2) for k, v in setups.items()},
         "pinned_to_one_core": pinned,
+        "error": "; ".join(errors) or None,
     }))
+    if errors:
+        sys.exit(1)
 
 
 if __name__ == "__main__":
