@@ -102,6 +102,13 @@ class Demo:
         moved = np.asarray(last.vehicle_p_ned)[:, :2] - np.asarray(first.vehicle_p_ned)[:, :2]
         return moved.mean(axis=0) / (last.t - first.t)
 
+    def spin(self, window: float = 0.4) -> float:
+        """The team's true rotation rate about its centroid, rad/s, clockwise from above."""
+        first = self.sample()
+        last = self.sample(after=first.t + window)
+        turned = np.angle(np.exp(1j * (_bearings(last) - _bearings(first))))  # wrapped
+        return float(turned.mean()) / (last.t - first.t)
+
     def close(self) -> None:
         """Stop the demo like Ctrl-C (so it stops its simulator too); kill it if it hangs."""
         self._sub.undeclare()
@@ -113,6 +120,13 @@ class Demo:
             except subprocess.TimeoutExpired:
                 self.proc.kill()
                 self.proc.wait(10)
+
+
+def _bearings(truth: SimTruth) -> np.ndarray:
+    """Each vehicle's bearing from the team's centroid (NED: clockwise from above), rad."""
+    p = np.asarray(truth.vehicle_p_ned)[:, :2]
+    r = p - p.mean(axis=0)
+    return np.arctan2(r[:, 1], r[:, 0])
 
 
 @pytest.fixture(scope="module")
@@ -184,18 +198,34 @@ def banner(page) -> str:  # type: ignore[no-untyped-def]
 
 
 def steer(demo: Demo, press: Callable[[], None], release: Callable[[], None],
-          hold: float = 2.0) -> np.ndarray:
-    """Change of the team's true velocity while an input is held, m/s.
+          hold: float = 2.0, held: Callable[[], None] = lambda: None,
+          motion: Callable[[], np.ndarray | float] | None = None) -> np.ndarray:
+    """Change of the team's true motion (``motion``: velocity, m/s) while an input is held.
 
     The paper's gains accelerate and brake gently (velocity gain c1 = 0.17/s), so
     the team still drifts from earlier inputs: compare velocities, not positions.
+    ``held`` runs while the input is still held (checks of the operator command).
     """
-    before = demo.velocity()
+    measure = motion or demo.velocity
+    before = measure()
     press()
     time.sleep(hold)
-    after = demo.velocity()
-    release()
-    return after - before
+    after = measure()
+    try:
+        held()
+    finally:
+        release()
+    return np.asarray(after) - np.asarray(before)
+
+
+def commanded(page, stick: str, check: Callable[[float], bool],  # type: ignore[no-untyped-def]
+              what: str) -> Callable[[], None]:
+    """A check that the page shows the loop commanding ``stick`` as ``check`` wants."""
+    def run() -> None:
+        wait_for(lambda: check(float(operator(page)[stick])), 3, what,
+                 lambda: f"command {text(page, 'operator')}")
+        assert str(operator(page)["source"]).startswith("browser#")
+    return run
 
 
 def situation(page, demo: Demo) -> str:  # type: ignore[no-untyped-def]
@@ -259,13 +289,21 @@ def test_the_pilot_flies_the_team_with_buttons_keys_and_sticks(pilot, demo: Demo
         wait_for(lambda p=phase: text(pilot, "phase") == p, 40, f"phase {phase}",
                  lambda: situation(pilot, demo))
 
-    # hotkey: hold W, the real team speeds up northwards
+    # hotkey: hold W, the loop commands full forward and the real team speeds up northwards
     keyboard = pilot.keyboard
-    dv = steer(demo, lambda: keyboard.down("w"), lambda: keyboard.up("w"))
+    dv = steer(demo, lambda: keyboard.down("w"), lambda: keyboard.up("w"),
+               held=commanded(pilot, "fwd", lambda v: v > 0.9, "fwd > 0.9 while W is held"))
     assert dv[0] > 0.1, (
         f"velocity change {dv} m/s with W; expected north; {situation(pilot, demo)}")
     wait_for(lambda: operator(pilot)["fwd"] == 0.0, 5, "sticks centred after W is released")
     assert str(operator(pilot)["source"]).startswith("browser#")
+
+    # hotkey: hold E, the loop commands clockwise rotation and the real team turns clockwise
+    dw = steer(demo, lambda: keyboard.down("e"), lambda: keyboard.up("e"), motion=demo.spin,
+               held=commanded(pilot, "rot", lambda v: v > 0.9, "rot > 0.9 while E is held"))
+    print(f"rotation rate change with E held 2 s: {dw:.3f} rad/s")
+    assert dw > 0.02, f"rotation rate change {dw} rad/s with E; {situation(pilot, demo)}"
+    wait_for(lambda: operator(pilot)["rot"] == 0.0, 5, "rotation centred after E is released")
 
     # virtual stick: drag the pad to the left and hold (west), then right (brake)
     pad = pilot.locator("[data-gcs-pad=move]").bounding_box()
@@ -277,13 +315,27 @@ def test_the_pilot_flies_the_team_with_buttons_keys_and_sticks(pilot, demo: Demo
         mouse.down()
         mouse.move(cx + dx * pad["width"] / 2, cy, steps=4)
 
-    dv = steer(demo, lambda: drag(-1.0), mouse.up)
+    dv = steer(demo, lambda: drag(-1.0), mouse.up,
+               held=commanded(pilot, "right", lambda v: v < -0.9, "right < -0.9, pad left"))
     assert dv[1] < -0.1, (
         f"velocity change {dv} m/s with the pad left; expected west; {situation(pilot, demo)}")
     wait_for(lambda: operator(pilot)["right"] == 0.0, 5, "the pad springs back")
-    dv = steer(demo, lambda: drag(1.0), mouse.up)
+    dv = steer(demo, lambda: drag(1.0), mouse.up,
+               held=commanded(pilot, "right", lambda v: v > 0.9, "right > 0.9, pad right"))
     assert dv[1] > 0.1, (
         f"velocity change {dv} m/s with the pad right; expected east; {situation(pilot, demo)}")
+
+    # the rotation bar: dragged left is counter-clockwise, and springs back
+    bar = pilot.locator("[data-gcs-pad=turn]").bounding_box()
+    bx, by = bar["x"] + bar["width"] / 2, bar["y"] + bar["height"] / 2
+    mouse.move(bx, by)
+    mouse.down()
+    mouse.move(bx - 0.6 * bar["width"], by, steps=4)  # past the end: full deflection
+    try:
+        commanded(pilot, "rot", lambda v: v < -0.9, "rot < -0.9, bar left")()
+    finally:
+        mouse.up()
+    wait_for(lambda: operator(pilot)["rot"] == 0.0, 5, "the bar springs back")
 
     # step keys: scale and altitude targets
     before = operator(pilot)
