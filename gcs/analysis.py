@@ -23,7 +23,9 @@ generalised from the square to any rigid team:
 * the left side of eq. max, ``c1 ||e_v|| + c2 e_max kappa + mu_r ||z||_max`` with
   kappa the largest sum, over one vehicle's edges, of their unit vectors'
   components along a team axis (1 + 0.7 for the square) and ``||z||_max`` the
-  longest edge carrying rotation disagreement, stretched by ``e_max``;
+  longest edge carrying rotation disagreement, stretched by ``e_max``; when it
+  fails, the gains that alone restore it are named with the value each needs
+  (:func:`gain_violation` says why not the largest term);
 * the largest deformation of the team that still leaves the configured largest
   commanded acceleration available: the rope pull grows with the distance from
   vehicle to payload, so F_h - T_h(r) >= m a_max bounds r.
@@ -40,7 +42,8 @@ import numpy as np
 from gcs.config import Team
 from gcs.motion import motion_basis
 
-__all__ = ["Analysis", "Violation", "a_safe_span", "analyze", "format_report", "rope_pull"]
+__all__ = ["GAIN_FIELDS", "Analysis", "Violation", "a_safe_span", "analyze", "format_report",
+           "gain_violation", "rope_pull"]
 
 #: Direction of the worst acceleration vector: 45 degrees to both axes (paper).
 _AXIS_FACTOR = math.sin(math.pi / 4)
@@ -72,10 +75,55 @@ def a_safe_span(horizontal_force: float, mass: float, accel: float, weight_share
 
 @dataclass(frozen=True)
 class Violation:
-    """A term of the analysis that the config breaks."""
+    """A condition of the analysis that the config breaks.
+
+    ``term`` names the config field(s) at fault; ``fixes`` maps each field that
+    alone restores the condition to the value it needs (the message says on
+    which side: at most, or below).
+    """
 
     term: str
     message: str
+    fixes: dict[str, float] = field(default_factory=dict)
+
+
+#: The config field behind each term of eq. max.
+GAIN_FIELDS = {"c1_speed": "guidance.c1", "c2_distance": "guidance.c2",
+               "mu_rotation": "guidance.max_rotation_disagreement"}
+
+
+def gain_violation(terms: dict[str, float], per_unit: dict[str, float],
+                   limit: float) -> Violation:
+    """Eq. max broken: name the gains that alone restore it, with the value each needs.
+
+    The left side is a sum, and the analysis has no budget per term to say which
+    one grew: the largest term is often the nominal one (c2's for the paper's
+    square), so naming it blamed c2 when c1 was raised. An operator can act on
+    what is named here instead: every gain whose term exceeds the excess, with
+    the largest value that fixes the condition if only that gain changes
+    (``per_unit[key]`` is the term per unit of its gain); when no gain can do it
+    alone, all three are named, to be reduced together.
+    """
+    lhs = sum(terms.values())
+    excess = lhs - limit
+    fixes = {GAIN_FIELDS[k]: (t - excess) / per_unit[k] for k, t in terms.items()
+             if t > excess and per_unit[k] > 0}
+    shown = " + ".join(f"{k} {t:.3f}" for k, t in terms.items())
+    head = (f"gain condition (eq. max) violated: {shown} = {lhs:.3f} > {limit:.3f} m/s^2 "
+            f"by {excess:.3f}")
+    if not fixes:
+        return Violation(" and ".join(GAIN_FIELDS.values()),
+                         f"{head}; no gain alone can restore it: reduce several")
+    alone = " or ".join(f"{name} <= {_floor3(v)}" for name, v in fixes.items())
+    cannot = [f"{GAIN_FIELDS[k]} (term {t:.3f})" for k, t in terms.items()
+              if GAIN_FIELDS[k] not in fixes]
+    tail = f"; alone, not {', '.join(cannot)}" if cannot else ""
+    return Violation(" or ".join(fixes), f"{head}; restored by {alone}{tail}", fixes)
+
+
+def _floor3(x: float) -> str:
+    """A bound printed to 3 decimals on its safe side (rounded down)."""
+    return f"{math.floor(x * 1000.0) / 1000.0:.3f}"
 
 
 @dataclass(frozen=True)
@@ -211,9 +259,12 @@ def analyze(team: Team) -> Analysis:
         max_tilt = math.acos(load / thrust_ref)
     bank = cfg.limits.bank
     if bank >= max_tilt:
+        tilt_deg = math.degrees(max_tilt)
         violations.append(Violation("limits.bank_deg",
                                     f"bank limit {bank:.3f} rad is not below the largest tilt "
-                                    f"{max_tilt:.3f} rad that still carries {load:.2f} N"))
+                                    f"{max_tilt:.3f} rad that still carries {load:.2f} N: set "
+                                    f"it below {_floor3(tilt_deg)} degrees",
+                                    {"limits.bank_deg": tilt_deg}))
     f_h = thrust_ref * math.sin(bank)
 
     weight_share = M * g / share
@@ -245,21 +296,20 @@ def analyze(team: Team) -> Analysis:
     }
     lhs = sum(terms.values())
     if lhs > max_axis:
-        worst = max(terms, key=lambda k: terms[k])
-        field_of = {"c1_speed": "guidance.c1", "c2_distance": "guidance.c2",
-                    "mu_rotation": "guidance.max_rotation_disagreement"}
-        violations.append(Violation(field_of[worst],
-                                    f"gain condition (eq. max) violated: {lhs:.3f} > "
-                                    f"{max_axis:.3f} m/s^2; largest term {worst} = "
-                                    f"{terms[worst]:.3f} m/s^2"))
+        violations.append(gain_violation(terms, {"c1_speed": ev_max,
+                                                 "c2_distance": e_max * kappa,
+                                                 "mu_rotation": worst_edge}, max_axis))
     if cfg.limits.accel_norm > max_accel:
         violations.append(Violation("limits.accel_norm",
                                     f"{cfg.limits.accel_norm:g} m/s^2 exceeds the largest "
-                                    f"guidance acceleration {max_accel:.3f} m/s^2"))
+                                    f"guidance acceleration {max_accel:.3f} m/s^2: set it to "
+                                    f"at most {_floor3(max_accel)}",
+                                    {"limits.accel_norm": max_accel}))
     if cfg.limits.accel_axis > max_axis:
         violations.append(Violation("limits.accel_axis",
                                     f"{cfg.limits.accel_axis:g} m/s^2 exceeds the per-axis "
-                                    f"limit {max_axis:.3f} m/s^2"))
+                                    f"limit {max_axis:.3f} m/s^2: set it to at most "
+                                    f"{_floor3(max_axis)}", {"limits.accel_axis": max_axis}))
 
     # Largest vehicle-payload distance that leaves the configured acceleration available.
     safe_span = a_safe_span(f_h, m, cfg.limits.accel_norm, weight_share, l)

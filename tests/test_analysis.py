@@ -36,28 +36,33 @@ def test_paper_figures_within_one_percent(square) -> None:  # type: ignore[no-un
 
 
 def test_paper_acceleration_chain(square) -> None:  # type: ignore[no-untyped-def]
-    """(F_h - M g / 3) / m and its 45-degree component.
+    """(F_h - M g / 3) / m and its 45-degree component, exact and as the paper rounds.
 
     The paper rounds F_h = 6.4 sin 20 deg = 2.189 N down to 2.18 N before the
     subtraction, which amplifies the 0.4 % rounding to 1.1 %: exact arithmetic
-    gives 2.203 and 1.558 m/s^2. With the paper's rounded force the chain gives
-    its 2.18 and 1.54 m/s^2.
+    gives 2.203 and 1.558 m/s^2, 1.07 % and 1.17 % above its 2.18 and 1.54. The
+    analysis keeps the exact arithmetic (no rounding in the code); this test
+    pins the formula, and checks the paper's two figures at 1 % against the
+    paper's own arithmetic: the same analysis with F_h rounded down to 2.18 N.
     """
     m = M = 0.4
+    f_h = 6.4 * math.sin(math.radians(20.0))
+    assert square.horizontal_force == pytest.approx(f_h, rel=1e-12)
     assert square.rope_pull_design == pytest.approx(M * G / 3, rel=1e-9)
-    assert square.max_accel == pytest.approx((square.horizontal_force - M * G / 3) / m)
-    assert square.max_accel_axis == pytest.approx(square.max_accel * math.sqrt(0.5))
-    assert square.max_accel == pytest.approx(2.18, rel=0.012)
-    assert square.max_accel_axis == pytest.approx(1.54, rel=0.012)
+    assert square.max_accel == pytest.approx((f_h - M * G / 3) / m, rel=1e-12)
+    assert square.max_accel_axis == pytest.approx((f_h - M * G / 3) / m * math.sqrt(0.5),
+                                                  rel=1e-12)
 
+    rounded_f_h = math.floor(square.horizontal_force * 100.0) / 100.0  # the paper's 2.18 N
+    assert rounded_f_h == 2.18
     team = load_team(SQUARE)
     frame = dataclasses.replace(team.config.airframe,
-                                thrust_reference=2.18 / math.sin(math.radians(20)))
-    rounded = analyze(dataclasses.replace(
+                                thrust_reference=rounded_f_h / math.sin(team.config.limits.bank))
+    paper = analyze(dataclasses.replace(
         team, config=dataclasses.replace(team.config, airframe=frame)))
-    assert rounded.horizontal_force == pytest.approx(2.18)
-    assert rounded.max_accel == pytest.approx(2.18, rel=0.01)
-    assert rounded.max_accel_axis == pytest.approx(1.54, rel=0.01)
+    assert paper.horizontal_force == pytest.approx(2.18, rel=1e-12)
+    assert paper.max_accel == pytest.approx(2.18, rel=0.01)
+    assert paper.max_accel_axis == pytest.approx(1.54, rel=0.01)
 
 
 def test_equilibrium_tension_is_eq_T(square) -> None:  # type: ignore[no-untyped-def]
@@ -109,26 +114,117 @@ def test_cli_table_and_json() -> None:
     data = json.loads(out.stdout)
     assert data["ok"] is True
     assert data["vertical_load_N"] == pytest.approx(5.22, rel=0.01)
-    assert set(data) >= {"equilibrium_tension_N", "max_tilt_rad", "horizontal_force_N",
-                         "rope_pull", "max_guidance_accel_m_s2",
-                         "max_guidance_accel_axis_m_s2", "gain_condition", "safe_deformation",
-                         "violations"}
-    assert set(data["gain_condition"]["terms_m_s2"]) == {"c1_speed", "c2_distance",
-                                                         "mu_rotation"}
 
 
-def test_cli_exit_status_names_the_term_at_fault(tmp_path: Path) -> None:
+#: The documented --json keys (README, "Worst-case analysis"); nested mappings as dicts.
+JSON_KEYS: dict[str, object] = {
+    "team": None, "vehicles": None, "gravity_m_s2": None, "payload_share": None,
+    "equilibrium_tension_N": None, "equilibrium_rope_angle_rad": None,
+    "vertical_load_N": None, "max_tilt_rad": None, "bank_limit_rad": None,
+    "horizontal_force_N": None,
+    "rope_pull": {"nominal_span_m": None, "nominal_N": None, "design_rope_angle_rad": None,
+                  "design_span_m": None, "design_N": None, "bound_N": None,
+                  "bound_span_m": None, "worst_edge_m": None, "worst_edge_N": None},
+    "max_guidance_accel_m_s2": None, "max_guidance_accel_axis_m_s2": None,
+    "gain_condition": {
+        "terms_m_s2": {"c1_speed": None, "c2_distance": None, "mu_rotation": None},
+        "coefficients": {"c1": None, "c2": None, "mu_r": None, "speed_error_m_s": None,
+                         "distance_error_m": None, "kappa": None, "worst_edge_m": None},
+        "lhs_m_s2": None, "rhs_m_s2": None, "ok": None},
+    "configured_limits": {"accel_norm_m_s2": None, "accel_axis_m_s2": None},
+    "safe_deformation": {"span_m": None, "margin_m": None},
+    "violations": None, "warnings": None, "ok": None,
+}
+VIOLATION_KEYS = ["term", "message", "fixes"]
+
+
+def key_tree(data: object) -> object:
+    """The keys of nested mappings, with None at the leaves (lists are leaves)."""
+    if isinstance(data, dict):
+        return {k: key_tree(v) for k, v in data.items()}
+    return None
+
+
+def test_json_keys_are_exactly_the_documented_tree(tmp_path: Path) -> None:
+    for path in (SQUARE, str(greedy(tmp_path, c1=0.8, accel_norm=2.5))):
+        data = json.loads(run_cli("analyze", path, "--json").stdout)
+        assert key_tree(data) == JSON_KEYS
+        assert list(data) == list(JSON_KEYS)  # order too: a stable object
+        for violation in data["violations"]:
+            assert list(violation) == VIOLATION_KEYS
+            assert all(isinstance(v, float) for v in violation["fixes"].values())
+        assert all(isinstance(w, str) for w in data["warnings"])
+    assert len(data["violations"]) == 2
+
+
+def greedy(tmp_path: Path, **changes: float) -> Path:
+    """The square with some guidance or limits fields changed, as a file."""
     data = yaml.safe_load(Path(SQUARE).read_text())
     data["airframe"] = str(Path("configs/airframes/bebop2.yaml").resolve())
-    data["guidance"]["c2"] = 0.9
-    path = tmp_path / "greedy.yaml"
+    for name, value in changes.items():
+        section = "limits" if name in ("bank_deg", "accel_norm", "accel_axis") else "guidance"
+        data[section][name] = value
+    path = tmp_path / ("greedy-" + "-".join(changes) + ".yaml")
     path.write_text(yaml.safe_dump(data))
-    out = run_cli("analyze", str(path))
-    assert out.returncode == 1
-    assert "VIOLATION guidance.c2: gain condition (eq. max) violated" in out.stdout
+    return path
+
+
+def violated(path: Path) -> list[dict[str, object]]:
+    """Run the CLI on a config that must fail; its violations (checked in text and JSON)."""
+    text = run_cli("analyze", str(path))
+    assert text.returncode == 1, text.stdout + text.stderr
     out = run_cli("analyze", str(path), "--json")
     assert out.returncode == 1
-    assert json.loads(out.stdout)["violations"][0]["term"] == "guidance.c2"
+    violations: list[dict[str, object]] = json.loads(out.stdout)["violations"]
+    for v in violations:
+        assert f"VIOLATION {v['term']}: {v['message']}" in text.stdout
+    return violations
+
+
+def fixed(tmp_path: Path, fixes: dict[str, float], **changes: float) -> None:
+    """Applying any one of the named fixes alone passes the analysis."""
+    team = load_team(greedy(tmp_path, **changes))
+    for name, value in fixes.items():
+        section, field = name.split(".")
+        cfg = team.config
+        part = dataclasses.replace(getattr(cfg, section), **{field: value * (1 - 1e-9)})
+        result = analyze(dataclasses.replace(team, config=dataclasses.replace(
+            cfg, **{section: part})))
+        assert result.ok, (name, result.violations)
+
+
+@pytest.mark.parametrize("changes, term", [
+    ({"c2": 0.9}, "guidance.c2"),
+    ({"c1": 1.2}, "guidance.c1"),
+    ({"max_rotation_disagreement": 1.0}, "guidance.max_rotation_disagreement"),
+    ({"c1": 0.8}, "guidance.c1 or guidance.c2"),  # was named 'guidance.c2': the largest term
+])
+def test_cli_gain_violation_names_the_gains_that_restore_it(
+        tmp_path: Path, changes: dict[str, float], term: str) -> None:
+    [v] = violated(greedy(tmp_path, **changes))
+    assert v["term"] == term
+    assert str(v["message"]).startswith("gain condition (eq. max) violated: c1_speed ")
+    assert set(v["fixes"]) == set(term.split(" or "))  # type: ignore[arg-type]
+    fixed(tmp_path, v["fixes"], **changes)  # type: ignore[arg-type]
+
+
+def test_cli_gain_violation_no_gain_alone_names_all_three(tmp_path: Path) -> None:
+    [v] = violated(greedy(tmp_path, c1=0.6, c2=0.7, max_rotation_disagreement=0.5))
+    assert v["term"] == ("guidance.c1 and guidance.c2 and "
+                         "guidance.max_rotation_disagreement")
+    assert "no gain alone can restore it" in str(v["message"]) and v["fixes"] == {}
+
+
+@pytest.mark.parametrize("changes, term, words", [
+    ({"accel_norm": 2.5}, "limits.accel_norm", "set it to at most 2.203"),
+    ({"accel_axis": 1.6, "accel_norm": 2.2}, "limits.accel_axis", "set it to at most 1.558"),
+    ({"bank_deg": 40.0}, "limits.bank_deg", "set it below 35.19"),
+])
+def test_cli_limit_violation_names_the_limit(tmp_path: Path, changes: dict[str, float],
+                                             term: str, words: str) -> None:
+    [v] = violated(greedy(tmp_path, **changes))
+    assert v["term"] == term and words in str(v["message"])
+    fixed(tmp_path, v["fixes"], **changes)  # type: ignore[arg-type]
 
 
 def test_cli_bad_config_is_one_line(tmp_path: Path) -> None:
