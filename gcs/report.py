@@ -208,8 +208,9 @@ def _markdown(s: dict[str, object]) -> str:
         lines += ["", "Worst distance error per phase (m):", ""]
         for phase, value in m.get("worst_distance_error_by_phase_m", {}).items():  # type: ignore[union-attr]
             lines.append(f"- {phase}: {value}")
-    lines += ["", "Link losses (frames the vehicles sent that did not arrive, by sequence "
-                  f"number, per system/component): {s['link_losses']}", "",
+    lines += ["", "Link losses (frames the vehicles sent missing from the log by sequence "
+                  "number, per system/component; in a damaged log the unreadable ones count "
+                  f"too): {s['link_losses']}", "",
               f"Unreadable: {s['corrupt_bytes_skipped']} corrupt bytes skipped, "
               f"{s['unknown_frames_skipped']} frames of unknown types, "
               f"{s['bad_timestamps_rejected']} records with a damaged timestamp; "
