@@ -99,11 +99,17 @@ def _cmd_report(args: argparse.Namespace) -> int:
     finally:
         for bar in bars.values():
             bar.close()
+    figures = None if args.quiet else tqdm(total=4, desc="figures", unit="fig", leave=False,
+                                           file=sys.stderr)
     try:
-        summary = write_report(log, out)
+        summary = write_report(log, out, progress=None if figures is None
+                               else lambda _name: figures.update(1))
     except OSError as exc:
         print(f"gcs report: error: {_os_error(exc, out)}", file=sys.stderr)
         return 2
+    finally:
+        if figures is not None:
+            figures.close()
     if args.json:
         print(json.dumps(summary))
     else:

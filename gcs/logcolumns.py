@@ -13,13 +13,13 @@ small whatever the log's length.
 
 from __future__ import annotations
 
-import mmap
 import re
 from pathlib import Path
 
 import numpy as np
 
 from gcs.link.dialect import MavMessage, mavlink
+from gcs.logscan import map_file, release_pages
 
 __all__ = ["CHUNK", "decode_columns", "wire_dtype"]
 
@@ -67,18 +67,15 @@ def decode_columns(path: str | Path, offset: np.ndarray, records: np.ndarray,
         return out
     raw = out.view(np.uint8).reshape(len(records), dtype.itemsize)
     columns = np.arange(dtype.itemsize)
-    with Path(path).open("rb") as fh, mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as mm:
-        buf = np.frombuffer(mm, dtype=np.uint8)
-        try:
-            for lo in range(0, len(records), CHUNK):
-                starts = offset[records[lo : lo + CHUNK]].astype(np.int64)
-                header = np.where(buf[starts] == _V2, _HEADER_V2, _HEADER_V1)
-                length = np.minimum(buf[starts + 1].astype(np.int64), dtype.itemsize)
-                at = starts[:, None] + header[:, None] + columns[None, :]
-                inside = columns[None, :] < length[:, None]
-                raw[lo : lo + len(starts)] = np.where(inside, buf[np.where(inside, at, 0)], 0)
-        finally:
-            del buf  # the mmap cannot close while a view of it lives
+    buf = map_file(Path(path))
+    for lo in range(0, len(records), CHUNK):
+        starts = offset[records[lo : lo + CHUNK]].astype(np.int64)
+        header = np.where(buf[starts] == _V2, _HEADER_V2, _HEADER_V1)
+        length = np.minimum(buf[starts + 1].astype(np.int64), dtype.itemsize)
+        at = starts[:, None] + header[:, None] + columns[None, :]
+        inside = columns[None, :] < length[:, None]
+        raw[lo : lo + len(starts)] = np.where(inside, buf[np.where(inside, at, 0)], 0)
+        release_pages(buf)
     return out
 
 

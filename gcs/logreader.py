@@ -17,7 +17,6 @@ stamp, rejected and counted. A truncated tail is reported, never fatal.
 
 from __future__ import annotations
 
-import mmap
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from gcs.link.dialect import MavMessage, mavlink
-from gcs.logscan import scan_buffer
+from gcs.logscan import map_file, scan_buffer
 
 __all__ = ["LogError", "TlogIndex"]
 
@@ -64,13 +63,7 @@ class TlogIndex:
             size = path.stat().st_size
             if size == 0:
                 raise LogError(f"{path}: empty file: no MAVLink messages")
-            with path.open("rb") as fh, mmap.mmap(fh.fileno(), 0,
-                                                 access=mmap.ACCESS_READ) as mm:
-                buf = np.frombuffer(mm, dtype=np.uint8)
-                try:
-                    scan = scan_buffer(buf, progress)
-                finally:
-                    del buf  # the mmap cannot close while a view of it lives
+            scan = scan_buffer(map_file(path), progress)
         except OSError as exc:
             raise LogError(f"{path}: cannot read file ({exc.strerror or exc})") from None
         if progress is not None:
@@ -105,15 +98,15 @@ class TlogIndex:
         """Decode the given records, in order, as (Unix time, message); bad ones skipped."""
         parser = mavlink.MAVLink(None)
         parser.robust_parsing = True
-        with self.path.open("rb") as fh, mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as mm:
-            for r in records:
-                start = int(self.offset[r])
-                frame = bytes(mm[start : start + int(self.length[r])])
-                try:
-                    msg = parser.decode(bytearray(frame))
-                except Exception:  # pymavlink raises its own base exception for bad CRCs
-                    continue
-                yield float(self.t[r]), msg
+        buf = map_file(self.path)
+        for r in records:
+            start = int(self.offset[r])
+            frame = bytearray(buf[start : start + int(self.length[r])])
+            try:
+                msg = parser.decode(frame)
+            except Exception:  # pymavlink raises its own base exception for bad CRCs
+                continue
+            yield float(self.t[r]), msg
 
     def streams_lost(self, systems: Iterable[int]) -> dict[tuple[int, int], int]:
         """Frames missing from the sequence numbers of each (system, component) of ``systems``.

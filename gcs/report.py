@@ -31,7 +31,47 @@ import numpy as np
 from gcs.flightlog import FlightLog
 from gcs.phases import Phase
 
-__all__ = ["write_report"]
+__all__ = ["PLOT_BUCKETS", "envelope", "write_report"]
+
+PLOT_BUCKETS = 2000
+"""Time buckets per plotted series: about two per pixel of a figure 10 inches wide."""
+
+
+def envelope(y: np.ndarray, buckets: int = PLOT_BUCKETS) -> np.ndarray:
+    """Indices of ``y`` that keep each time bucket's lowest and highest sample, in order.
+
+    Why: a figure cannot show more than a few points per pixel, while an hour of
+    telemetry is hundreds of thousands of samples per line, which matplotlib
+    turns into paths of hundreds of megabytes. Keeping each bucket's extremes
+    (not every k-th sample) still draws every spike, which is what a report
+    of a flight is read for.
+    """
+    n = len(y)
+    if n <= 2 * buckets:
+        return np.arange(n)
+    size = -(-n // buckets)
+    grid = np.full(size * buckets, np.nan)
+    grid[:n] = y
+    grid = grid.reshape(buckets, size)
+    finite = np.isfinite(grid)
+    base = np.arange(buckets) * size
+    lo = base + np.where(finite, grid, np.inf).argmin(axis=1)
+    hi = base + np.where(finite, grid, -np.inf).argmax(axis=1)
+    keep = np.unique(np.concatenate([lo, hi]))
+    return keep[keep < n]
+
+
+def _plot(ax: plt.Axes, t: np.ndarray, y: np.ndarray, *args: object, **kwargs: object) -> list:
+    """``ax.plot(t, y, ...)`` of a time series, thinned by :func:`envelope`."""
+    keep = envelope(y)
+    return ax.plot(t[keep], y[keep], *args, **kwargs)
+
+
+def _path(ax: plt.Axes, x: np.ndarray, y: np.ndarray, *args: object, **kwargs: object) -> list:
+    """``ax.plot(x, y, ...)`` of a path, every k-th point (paths are smooth) plus the last."""
+    keep = np.unique(np.r_[np.arange(0, len(x), max(1, len(x) // (4 * PLOT_BUCKETS))),
+                           len(x) - 1]) if len(x) else np.zeros(0, dtype=int)
+    return ax.plot(x[keep], y[keep], *args, **kwargs)
 
 
 def write_report(log: FlightLog, out: Path,
@@ -87,9 +127,9 @@ def _formation(log: FlightLog) -> plt.Figure | None:
         t = log.tick_t - t0
         for k in range(len(d)):
             i, j = edges[k]  # type: ignore[index]
-            top.plot(t, actual[:, k], lw=1.2, label=f"{ids[i]}-{ids[j]}")  # type: ignore[index]
+            _plot(top, t, actual[:, k], lw=1.2, label=f"{ids[i]}-{ids[j]}")  # type: ignore[index]
         for value in np.unique(np.round(desired, 3), axis=1).T:
-            top.plot(t, value, "k--", lw=0.8)
+            _plot(top, t, value, "k--", lw=0.8)
         top.legend(ncol=6, fontsize=7, loc="upper right")
         _shade_phases(top, log, t0)
     else:
@@ -97,8 +137,8 @@ def _formation(log: FlightLog) -> plt.Figure | None:
                  ha="center", va="center", transform=top.transAxes)
     top.set_ylabel("distance [m]")
     for sysid, tr in sorted(log.tracks.items()):
-        bottom.plot(tr.t - t0, tr.v_ned[:, 0], lw=1, label=f"{sysid} vx")
-        bottom.plot(tr.t - t0, tr.v_ned[:, 1], lw=1, ls=":", label=f"{sysid} vy")
+        _plot(bottom, tr.t - t0, tr.v_ned[:, 0], lw=1, label=f"{sysid} vx")
+        _plot(bottom, tr.t - t0, tr.v_ned[:, 1], lw=1, ls=":", label=f"{sysid} vy")
     bottom.set_ylabel("velocity [m/s] (x solid, y dotted)")
     bottom.set_xlabel("time [s]")
     bottom.legend(ncol=4, fontsize=7, loc="upper right")
@@ -114,11 +154,11 @@ def _trajectories(log: FlightLog) -> plt.Figure | None:
     for sysid, tr in sorted(log.tracks.items()):
         if not len(tr.t):
             continue
-        ax.plot(tr.p_ned[:, 1], tr.p_ned[:, 0], lw=1, label=f"vehicle {sysid}")
+        _path(ax, tr.p_ned[:, 1], tr.p_ned[:, 0], lw=1, label=f"vehicle {sysid}")
         ax.plot(tr.p_ned[-1, 1], tr.p_ned[-1, 0], "o", ms=4, color=ax.lines[-1].get_color())
     if "payload" in log.arrays:
         p = log.arrays["payload"]
-        ax.plot(p[:, 1], p[:, 0], "k-", lw=1.5, label="payload")
+        _path(ax, p[:, 1], p[:, 0], "k-", lw=1.5, label="payload")
     ax.set_xlabel("east [m]")
     ax.set_ylabel("north [m]")
     ax.set_aspect("equal")
@@ -138,7 +178,7 @@ def _distance_errors(log: FlightLog) -> plt.Figure | None:
     ids, edges = log.team["ids"], log.team["edges"]
     for k in range(e.shape[1]):
         i, j = edges[k]  # type: ignore[index]
-        ax.plot(log.tick_t - t0, e[:, k], lw=1, label=f"{ids[i]}-{ids[j]}")  # type: ignore[index]
+        _plot(ax, log.tick_t - t0, e[:, k], lw=1, label=f"{ids[i]}-{ids[j]}")  # type: ignore[index]
     _shade_phases(ax, log, t0)
     ax.axhline(0, color="k", lw=0.5)
     ax.set_xlabel("time [s]")
@@ -157,9 +197,9 @@ def _accelerations(log: FlightLog) -> plt.Figure | None:
     ids = log.team["ids"] if log.team is not None else tuple(range(1, log.n_vehicles + 1))
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(10, 6), sharex=True)
     for i, vid in enumerate(ids):  # type: ignore[arg-type]
-        line = top.plot(t, np.linalg.norm(acc[:, i], axis=1), lw=1, label=f"|a| {vid}")[0]
-        bottom.plot(t, acc[:, i, 0], lw=1, color=line.get_color(), label=f"{vid} x")
-        bottom.plot(t, acc[:, i, 1], lw=1, ls=":", color=line.get_color(), label=f"{vid} y")
+        line = _plot(top, t, np.linalg.norm(acc[:, i], axis=1), lw=1, label=f"|a| {vid}")[0]
+        _plot(bottom, t, acc[:, i, 0], lw=1, color=line.get_color(), label=f"{vid} x")
+        _plot(bottom, t, acc[:, i, 1], lw=1, ls=":", color=line.get_color(), label=f"{vid} y")
     if log.team is not None:
         top.axhline(float(log.team["accel_norm"]), color="r", ls="--", lw=1, label="norm limit")
         for sign in (1.0, -1.0):
