@@ -16,7 +16,7 @@ from typing import NamedTuple
 import numpy as np
 import pytest
 
-from sim.config import SensorConfig, WorldConfig, load_world_config
+from sim.config import SensorConfig, WindConfig, WorldConfig, load_world_config
 from sim.layout import paper_square
 from sim.scenario import (
     DEFAULT_AIRFRAME,
@@ -25,7 +25,9 @@ from sim.scenario import (
     build_team,
     take_off,
 )
+from sim.world import World
 from vehicles.airframe import load_airframe
+from vehicles.autopilot import Autopilot
 from vehicles.config import load_autopilot_config
 from vehicles.quaternion import quat_to_rotation
 
@@ -188,17 +190,57 @@ def test_payload_stays_on_the_ground_until_the_ropes_lift_it(
     assert hover.takeoff_payload_height[-1] > 0.5
 
 
+def hovering(config: WorldConfig) -> tuple[World, Autopilot]:
+    """The paper's team after the climb and 4 s of HOLD: payload hanging, settled."""
+    world, autopilot = build_team(paper_square(), payload_mass=PAYLOAD_MASS,
+                                  rng=np.random.default_rng(11),
+                                  airframe=load_airframe(DEFAULT_AIRFRAME), world_config=config,
+                                  autopilot_config=load_autopilot_config(DEFAULT_AUTOPILOT_CONFIG))
+    take_off(world, autopilot, ALTITUDE)
+    world.run(autopilot, 4.0)
+    return world, autopilot
+
+
+class StepForces(NamedTuple):
+    thrust: np.ndarray  # (N,) rotor thrust of each vehicle, N
+    tension: np.ndarray  # (N,) N
+    vehicle_drag: np.ndarray  # (N, 3) NED, N
+    payload_drag: np.ndarray  # (3,) NED, N
+
+
+def one_physics_step(world: World, autopilot: Autopilot) -> StepForces:
+    """One physics step from a known state, checked against the model's equations:
+    each specific force is (thrust along -z_body + rope pull towards the payload
+    - c_d (v - wind)) / m, and the airborne payload accelerates by
+    (rope pulls - c_payload (v_payload - wind)) / M + g. The drag terms come from the
+    configured coefficients, so a physics that drops one fails here."""
+    airframe, g = world.airframe, world.config.gravity
+    p, v, q = world.p_ned, world.v_ned, world.q_wxyz
+    payload_p, payload_v = world.payload_p_ned, world.payload_v_ned
+    assert payload_p[2] < world.config.ground.z_ned - 0.1  # airborne: no ground contact
+    dt = 1.0 / world.physics_rate_hz
+    world.step(autopilot.step(world.measurements()), dt)
+    wind = world.wind_ned
+    thrust = airframe.thrust_coefficient * np.sum(world.rotor_speed**2, axis=1)
+    tension = world.rope_tension
+    to_vehicle = (p - payload_p) / np.linalg.norm(p - payload_p, axis=1, keepdims=True)
+    vehicle_drag = -airframe.drag_coefficient * (v - wind)
+    for i in range(world.n_vehicles):
+        r = np.array(quat_to_rotation(*q[i])).reshape(3, 3)
+        force = -thrust[i] * r[:, 2] - tension[i] * to_vehicle[i] + vehicle_drag[i]
+        assert world.specific_force_body[i] == pytest.approx(r.T @ force / airframe.mass,
+                                                             abs=1e-9)
+    payload_drag = -world.config.payload_drag_coefficient * (payload_v - wind)
+    payload_accel = (tension @ to_vehicle + payload_drag) / PAYLOAD_MASS + [0.0, 0.0, g]
+    assert (world.payload_v_ned - payload_v) / dt == pytest.approx(payload_accel, abs=1e-9)
+    return StepForces(thrust, tension, vehicle_drag, payload_drag)
+
+
 def test_the_accelerometer_feels_the_rope() -> None:
     """INDI needs no payload model because the accelerometer measures the rope: its
     specific force is (thrust + rope + drag) / m, which in hover is -g (about -9.69 on
     z_body at the 9.3 degree tilt), not the thrust alone (-T / m, about -12.4)."""
-    airframe = load_airframe(DEFAULT_AIRFRAME)
-    world, autopilot = build_team(paper_square(), payload_mass=PAYLOAD_MASS,
-                                  rng=np.random.default_rng(11), airframe=airframe,
-                                  world_config=silent_world(),
-                                  autopilot_config=load_autopilot_config(DEFAULT_AUTOPILOT_CONFIG))
-    take_off(world, autopilot, ALTITUDE)
-    world.run(autopilot, 4.0)  # payload hanging, settled
+    world, autopilot = hovering(silent_world())
     # Noise-free, each accelerometer sample is the specific force of its step ...
     np.testing.assert_array_equal(world.measurements().accel_body, world.specific_force_body)
     # ... which, hovering, is what holds the vehicle up against gravity.
@@ -210,19 +252,21 @@ def test_the_accelerometer_feels_the_rope() -> None:
                        for q, f in zip(world.state.q_wxyz, world.specific_force_body,
                                        strict=True)])
     assert np.mean(in_ned, axis=0) == pytest.approx(np.tile([0.0, 0.0, -g], (4, 1)), abs=0.02)
-    # One physics step from a known state: the specific force is exactly the rotor
-    # thrust along -z_body, the rope's pull towards the payload and the drag, over m.
-    p, v, q, payload = world.p_ned, world.v_ned, world.q_wxyz, world.payload_p_ned
-    world.step(autopilot.step(world.measurements()), 1.0 / world.physics_rate_hz)
-    thrust = airframe.thrust_coefficient * np.sum(world.rotor_speed**2, axis=1)
-    tension = world.rope_tension
-    assert np.all(np.abs(tension / paper_tension(g) - 1.0) < 0.02), tension
-    for i in range(4):
-        r = np.array(quat_to_rotation(*q[i])).reshape(3, 3)
-        rope = tension[i] * (payload - p[i]) / np.linalg.norm(payload - p[i])
-        drag = -airframe.drag_coefficient * (v[i] - world.wind_ned)
-        force = -thrust[i] * r[:, 2] + rope + drag
-        assert world.specific_force_body[i] == pytest.approx(r.T @ force / airframe.mass,
-                                                             abs=1e-9)
-        # The rope's share is what the accelerometer adds to thrust alone.
-        assert world.specific_force_body[i, 2] + thrust[i] / airframe.mass > 2.0
+    # One physics step: thrust, rope and drag make the specific force exactly.
+    forces = one_physics_step(world, autopilot)
+    assert np.all(np.abs(forces.tension / paper_tension(g) - 1.0) < 0.02), forces.tension
+    # The rope's share is what the accelerometer adds to thrust alone.
+    assert np.all(world.specific_force_body[:, 2] + forces.thrust / world.airframe.mass > 2.0)
+
+
+def test_steady_wind_drags_vehicles_and_payload_as_the_model_states() -> None:
+    """Drag is linear in the airspeed v - wind, on each vehicle (airframe c_d) and on
+    the payload (its own coefficient). Hovering in a steady 2.3 m/s wind with a
+    vertical part, one physics step holds both drag terms exactly."""
+    config = dataclasses.replace(silent_world(), wind=WindConfig(mean_ned=(2.0, -1.0, 0.5)))
+    world, autopilot = hovering(config)
+    forces = one_physics_step(world, autopilot)
+    # The terms are far above the 1e-9 tolerance: 0.11 N per vehicle (0.29 m/s^2 of
+    # specific force) and 0.046 N on the payload (0.11 m/s^2).
+    assert np.all(np.linalg.norm(forces.vehicle_drag, axis=1) > 0.1), forces.vehicle_drag
+    assert np.linalg.norm(forces.payload_drag) > 0.04, forces.payload_drag
