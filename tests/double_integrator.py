@@ -2,7 +2,8 @@
 
 The hold is integrated exactly (constant acceleration between ticks), so the
 only approximation is the one the real system has: the guidance samples at its
-rate and the vehicles hold its output.
+rate and the vehicles hold its output. Also the rotation between NED and a
+vehicle's own frame, which the tests of the guidance's frames share.
 """
 
 from __future__ import annotations
@@ -12,6 +13,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from gcs.guidance import Guidance, MotionDemand
+
+
+def yaw_rotations(yaw: np.ndarray) -> np.ndarray:
+    """R(yaw) (n, 2, 2): own frame to NED for each vehicle (its transpose: NED to own).
+
+    Written out here, not taken from gcs, so that a test holds the kernels to it.
+    """
+    c, s = np.cos(yaw), np.sin(yaw)
+    return np.stack((np.stack((c, -s), -1), np.stack((s, c), -1)), -2)
 
 
 @dataclass

@@ -7,18 +7,23 @@ import dataclasses
 import numpy as np
 import pytest
 
-from gcs.config import load_team
-from gcs.guidance import Guidance, MotionDemand
+from gcs.config import Team, load_team
+from gcs.guidance import Guidance, MotionDemand, relative_measurements
 from gcs.udi import finite_max_norm
-from tests.double_integrator import fly
+from tests.double_integrator import fly, yaw_rotations
 
 TEAMS = ["configs/bebop_square.yaml", "configs/bebop_triangle.yaml",
          "configs/bebop_hexagon.yaml"]
 
 
 @pytest.fixture(params=TEAMS, ids=lambda p: p.split("/")[-1][:-5])
-def guidance(request: pytest.FixtureRequest) -> Guidance:
-    return Guidance.from_team(load_team(request.param))
+def team(request: pytest.FixtureRequest) -> Team:
+    return load_team(request.param)
+
+
+@pytest.fixture
+def guidance(team: Team) -> Guidance:
+    return Guidance.from_team(team)
 
 
 def worst_error(g: Guidance, p: np.ndarray, scale: float = 1.0) -> np.ndarray:
@@ -219,3 +224,87 @@ def test_a_non_finite_command_becomes_zero_and_the_largest_norm_is_of_what_is_le
     for _ in range(50):
         a = rng.normal(0, 2, (7, 2))
         assert finite_max_norm(a.copy()) == pytest.approx(np.linalg.norm(a, axis=1).max())
+
+
+def unsaturated_ned(g: Guidance, p: np.ndarray, v: np.ndarray, yaw: np.ndarray,
+                    demand: MotionDemand) -> np.ndarray:
+    """Eq. udi's command (n, 2) in NED before any limit: each vehicle's, rotated by its yaw."""
+    local = g.local(relative_measurements(g.formation, p, v, yaw), demand)
+    return np.einsum("ikl,il->ik", yaw_rotations(yaw), local)
+
+
+def norm_then_axis(u: np.ndarray, norm_max: float, axis_max: float) -> np.ndarray:
+    """The saturation the README states: scaled into the norm (direction kept), then each
+    NED axis clipped."""
+    norm = np.linalg.norm(u, axis=1, keepdims=True)
+    return np.clip(u * np.minimum(1.0, norm_max / np.maximum(norm, 1e-300)), -axis_max,
+                   axis_max)
+
+
+def test_large_commands_are_saturated_with_the_configs_limits_norm_first(
+        team: Team, guidance: Guidance) -> None:
+    """Stretched to 4-6 times its shape, flying at about 1 m/s in random directions:
+    every vehicle's raw command is beyond the config's limits, and what is sent is it
+    saturated in norm, then per NED axis.
+
+    With the shipped limits (accel_axis below accel_norm sin 45 deg, as the paper
+    derives it) a command scaled to the norm always has an axis beyond accel_axis:
+    the clip follows, so the norm step shows in the direction of what is sent (its
+    smaller component is the raw one scaled to accel_norm), not in its length.
+    """
+    lim = team.config.limits  # the config's figures, not the guidance's copies of them
+    f = guidance.formation
+    rng = np.random.default_rng(8)
+    demand = MotionDemand(forward=1.0, rotate=-1.0)
+    shaped_by_the_norm = 0
+    for _ in range(10):
+        p = f.positions * rng.uniform(4.0, 6.0) + rng.normal(0, 0.3, f.positions.shape)
+        v = rng.normal(0, 1.0, p.shape)
+        yaw = rng.uniform(-np.pi, np.pi, f.n)
+        raw = unsaturated_ned(guidance, p, v, yaw, demand)
+        assert np.linalg.norm(raw, axis=1).min() > 1.5 * lim.accel_norm
+        u = guidance.accelerations(p, v, yaw, demand)
+        np.testing.assert_allclose(u, norm_then_axis(raw, lim.accel_norm, lim.accel_axis),
+                                   rtol=0, atol=1e-12)
+        norm, axis = np.linalg.norm(u, axis=1), np.abs(u).max(axis=1)
+        assert norm.max() <= lim.accel_norm + 1e-12 and axis.max() <= lim.accel_axis + 1e-12
+        # every vehicle is held at a cap, not merely under both
+        assert np.all(np.isclose(norm, lim.accel_norm, rtol=0, atol=1e-12)
+                      | np.isclose(axis, lim.accel_axis, rtol=0, atol=1e-12))
+        # the norm's cap shapes what is sent: clipping per axis alone (or before the
+        # norm, the same here) sends a larger smaller component
+        axis_only = np.clip(raw, -lim.accel_axis, lim.accel_axis)
+        shaped_by_the_norm += int(np.sum(np.abs(u - axis_only).max(axis=1) > 0.1))
+    assert shaped_by_the_norm >= 5 * f.n
+
+
+def test_commands_within_the_configs_limits_pass_unchanged(team: Team,
+                                                           guidance: Guidance) -> None:
+    """Stretched until a command is just under a limit (97 %): nothing is clipped, the
+    sent command is eq. udi's."""
+    lim = team.config.limits
+    f = guidance.formation
+    rng = np.random.default_rng(9)
+    noise = rng.normal(0, 0.05, f.positions.shape)
+    v = rng.normal(0, 0.2, noise.shape)
+    yaw = rng.uniform(-np.pi, np.pi, f.n)
+    demand = MotionDemand(forward=0.5, right=0.3, rotate=0.5)
+
+    def raw_at(stretch: float) -> np.ndarray:
+        return unsaturated_ned(guidance, f.positions * stretch + noise, v, yaw, demand)
+
+    def load(raw: np.ndarray) -> float:
+        """The largest command as a fraction of the nearer limit."""
+        return max(np.abs(raw).max() / lim.accel_axis,
+                   np.linalg.norm(raw, axis=1).max() / lim.accel_norm)
+
+    low, high = 1.0, 3.0  # the command grows with the stretch: bisect for 97 % of a limit
+    assert load(raw_at(low)) < 0.97 < load(raw_at(high))
+    for _ in range(40):
+        stretch = 0.5 * (low + high)
+        low, high = (stretch, high) if load(raw_at(stretch)) < 0.97 else (low, stretch)
+    stretch = low
+    raw = raw_at(stretch)
+    assert load(raw) == pytest.approx(0.97, abs=1e-6)
+    np.testing.assert_allclose(guidance.accelerations(f.positions * stretch + noise, v, yaw,
+                                                      demand), raw, rtol=0, atol=1e-12)
