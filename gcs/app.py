@@ -169,10 +169,13 @@ class GcsApp:
         self._subs.append(self.session.declare_subscriber(keys.sim(self.fleet, "truth"),
                                                           self._on_truth))
         self.runtime: Runtime | None = None
+        self._early_notes: list[tuple[str, str]] = []  # link notes before the runtime exists
+        self._notes_lock = threading.Lock()
         self.links = LinkManager(cfg.vehicle_links(),
                                  settings=dataclasses.replace(cfg.gcs, zenoh=settings),
                                  base_dir=Path(team.source).parent, session=self.session,
-                                 clock=self.clock.now, on_presence=self._on_presence)
+                                 clock=self.clock.now, on_presence=self._on_presence,
+                                 on_note=self._note)
         analysis = analyze(team)
         self.operator = OperatorCommand(cfg.operator, _safe_guidance(team, analysis),
                                         now=self.clock.now())
@@ -191,6 +194,10 @@ class GcsApp:
                                recorder=self.recorder, analysis=analysis,
                                truth_source=lambda: self.truth,
                                setpoints_per_tick=1 if lockstep else None, gate=self.gate)
+        with self._notes_lock:
+            for level, text in self._early_notes:
+                self.runtime.note(level, text)
+            self._early_notes.clear()
         if self._ack is not None:
             self._echo = _EchoCounter(self.links.links.values())
             self.runtime.add_listener(lambda snap: self._send_ack(snap.fleet.t))
@@ -198,9 +205,15 @@ class GcsApp:
         self._thread: threading.Thread | None = None
 
     def _on_presence(self, event: PresenceEvent) -> None:
-        if self.runtime is not None:
-            level = "info" if event.presence is Presence.APPEARED else "warning"
-            self.runtime.note(level, event.text)
+        self._note("info" if event.presence is Presence.APPEARED else "warning", event.text)
+
+    def _note(self, level: str, text: str) -> None:
+        """An event from the links (any thread); kept until the runtime exists to show it."""
+        with self._notes_lock:
+            if self.runtime is None:
+                self._early_notes.append((level, text))
+                return
+        self.runtime.note(level, text)
 
     def _on_clock(self, sample: zenoh.Sample) -> None:
         try:

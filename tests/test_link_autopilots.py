@@ -29,7 +29,10 @@ from gcs.link import (
     CommandResult,
     CopterMode,
     Link,
+    LinkConfig,
     LinkError,
+    LinkManager,
+    LocalPosition,
     MavutilTransport,
     Px4AutoSubMode,
     Px4MainMode,
@@ -76,7 +79,8 @@ class ScriptedAutopilot(threading.Thread):
     """Plays a PX4, ArduPilot or simulated autopilot over a mavutil UDP connection."""
 
     def __init__(self, kind: str, gcs_port: int, *, script: dict[int, list[Any]] | None = None,
-                 signing_key: SigningKey | None = None, z_ned: float = 0.0) -> None:
+                 signing_key: SigningKey | None = None, z_ned: float = 0.0,
+                 position_rate_hz: float = 20.0, flies: bool = False) -> None:
         super().__init__(daemon=True, name=f"scripted-{kind}")
         self.kind = kind
         self.conn = mavutil.mavlink_connection(f"udpout:127.0.0.1:{gcs_port}",
@@ -96,6 +100,13 @@ class ScriptedAutopilot(threading.Thread):
         self.armed = False
         self.custom_mode = int(INITIAL_MODE[kind])
         self.z_ned = z_ned
+        self.vz_ned = 0.0
+        self.position_period_s = 1.0 / position_rate_hz
+        """LOCAL_POSITION_NED period, s; SET_MESSAGE_INTERVAL changes it."""
+        self.flies = flies
+        """ArduPilot: armed in GUIDED, z follows the last setpoint's afz (z'' = afz) until
+        GUID_TIMEOUT (3 s); else z jumps to the take-off altitude."""
+        self._afz: tuple[float, float] | None = None  # (time, afz) of the last setpoint
         self._later: list[tuple[float, int, int]] = []
         self._quit = threading.Event()
         self._offboard_since: float | None = None
@@ -120,12 +131,18 @@ class ScriptedAutopilot(threading.Thread):
     # -- the autopilot ------------------------------------------------------------------------
 
     def run(self) -> None:
-        next_stream = 0.0
+        next_beat = next_position = 0.0
+        last = time.monotonic()
         while not self._quit.is_set():
             now = time.monotonic()
-            if now >= next_stream:
-                self._stream()
-                next_stream = now + 0.05
+            self._fly(now - last, now)
+            last = now
+            if now >= next_beat:
+                self._heartbeat()
+                next_beat = now + 0.05
+            if now >= next_position:
+                self._position()
+                next_position = now + self.position_period_s
             for item in [x for x in self._later if x[0] <= now]:
                 self._later.remove(item)
                 self._ack(item[1], item[2])
@@ -148,13 +165,29 @@ class ScriptedAutopilot(threading.Thread):
                 self._setpoint(msg)
             self._check_offboard_stream()
 
-    def _stream(self) -> None:
+    def _heartbeat(self) -> None:
         base = v20.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | (
             v20.MAV_MODE_FLAG_SAFETY_ARMED if self.armed else 0)
         self.conn.mav.heartbeat_send(v20.MAV_TYPE_QUADROTOR, AUTOPILOT[self.kind], base,
                                      self.custom_mode, v20.MAV_STATE_ACTIVE)
+
+    def _position(self) -> None:
         self.conn.mav.local_position_ned_send(int(time.monotonic() * 1000) & 0xFFFFFFFF,
-                                              0.0, 0.0, self.z_ned, 0.0, 0.0, 0.0)
+                                              0.0, 0.0, self.z_ned, 0.0, 0.0, self.vz_ned)
+
+    def _fly(self, dt: float, now: float) -> None:
+        """Vertical double integrator driven by afz, as a GUIDED copter given acceleration."""
+        if not (self.flies and self.armed and self.custom_mode == CopterMode.GUIDED):
+            return
+        az = self._afz[1] if self._afz is not None and now - self._afz[0] < 3.0 else 0.0
+        self.z_ned += self.vz_ned * dt + 0.5 * az * dt * dt
+        self.vz_ned += az * dt
+
+    def _interval(self, msg: Any) -> int:
+        """SET_MESSAGE_INTERVAL: LOCAL_POSITION_NED's rate is honoured, the rest accepted."""
+        if int(msg.param1) == v20.MAVLINK_MSG_ID_LOCAL_POSITION_NED and msg.param2 > 0:
+            self.position_period_s = msg.param2 / 1e6
+        return v20.MAV_RESULT_ACCEPTED
 
     def _violation(self, text: str) -> None:
         with self.lock:
@@ -169,6 +202,9 @@ class ScriptedAutopilot(threading.Thread):
             entry = queue.pop(0)
             if entry is DROP:
                 return
+            if entry == v20.MAV_RESULT_ACCEPTED and msg.command == \
+                    v20.MAV_CMD_SET_MESSAGE_INTERVAL:
+                self._interval(msg)
             if isinstance(entry, InProgress):
                 self._ack(msg.command, v20.MAV_RESULT_IN_PROGRESS)
                 self._later.append((time.monotonic() + entry.delay_s, msg.command, entry.final))
@@ -206,6 +242,8 @@ class ScriptedAutopilot(threading.Thread):
             self.custom_mode = px4_custom_mode(Px4MainMode.AUTO, Px4AutoSubMode.LAND)
             self._offboard_since = None
             return v20.MAV_RESULT_ACCEPTED
+        if msg.command == v20.MAV_CMD_SET_MESSAGE_INTERVAL:
+            return self._interval(msg)
         return v20.MAV_RESULT_UNSUPPORTED
 
     # ArduCopter: GUIDED before arming and take-off; take-off only when armed.
@@ -226,7 +264,7 @@ class ScriptedAutopilot(threading.Thread):
             self.z_ned = -msg.param7
             return v20.MAV_RESULT_ACCEPTED
         if msg.command == v20.MAV_CMD_SET_MESSAGE_INTERVAL:
-            return v20.MAV_RESULT_ACCEPTED
+            return self._interval(msg)
         return v20.MAV_RESULT_UNSUPPORTED
 
     # Simulated vehicles: modes of gcs.link.modes.SimMode.
@@ -268,6 +306,7 @@ class ScriptedAutopilot(threading.Thread):
                     self._violation(f"type_mask {msg.type_mask} splits a group")
             if msg.type_mask != MASK_ACCEL:
                 self._violation(f"type_mask {msg.type_mask} is not acceleration only")
+            self._afz = (time.monotonic(), msg.afz)
 
     def _check_offboard_stream(self) -> None:
         if self.kind != "px4" or self._offboard_since is None:
@@ -366,12 +405,83 @@ def test_ardupilot_guided_arm_takeoff_then_acceleration_only(udp_link: Link) -> 
     assert guided_t < arm_t < takeoff[0].t < modes[1][0]
     assert takeoff[0].msg.param7 == 2.0
     setpoints = peer.setpoints()
-    assert len(setpoints) == 4
+    assert len(setpoints) >= 4  # the caller's four, and one per position while they stream
     for r in setpoints:
         assert r.msg.type_mask == MASK_ACCEL
         assert (r.msg.afx, r.msg.afy) == pytest.approx((0.2, -0.1))
         # 0.5 m below the target with no vertical speed: accelerate up (negative down).
         assert r.msg.afz == pytest.approx(-0.5, abs=1e-6)
+
+
+def test_ardupilot_closes_the_vertical_loop_at_telemetry_rate(udp_link: Link) -> None:
+    """A slow caller (2 Hz) still gets a setpoint per position (20 Hz), which climbs the
+    copter to the target; the extra setpoints end once the caller stops streaming."""
+    peer = start_peer(udp_link, "ardupilot", flies=True)
+    try:
+        profile = ArduPilotProfile(udp_link)
+        profile.takeoff(altitude_m=1.0)
+        start = time.monotonic()
+        while time.monotonic() - start < 10.0:
+            profile.send_setpoint(accel_xy_ned=(0.3, -0.2), z_ned=-2.0)
+            time.sleep(0.5)
+        stopped = time.monotonic()
+        time.sleep(1.5)
+        z_end = peer.z_ned
+    finally:
+        peer.stop()
+    assert peer.violations == []
+    setpoints = peer.setpoints()
+    streaming = [r for r in setpoints if start + 1.0 <= r.t <= stopped]
+    rate = len(streaming) / (stopped - start - 1.0)
+    assert rate > 15.0, f"{rate:.1f} setpoints/s: the vertical loop waits for the caller"
+    assert all((r.msg.afx, r.msg.afy) == pytest.approx((0.3, -0.2)) for r in setpoints)
+    assert z_end == pytest.approx(-2.0, abs=0.05)
+    assert setpoints[-1].t < stopped + profile.follow_s + 0.15  # stops with the caller
+
+
+@pytest.mark.parametrize(("kind", "script", "note"), [
+    ("ardupilot", {}, ("info", "vehicle 1: telemetry rates set for LOCAL_POSITION_NED, "
+                               "ATTITUDE, SYS_STATUS")),
+    ("px4", {v20.MAV_CMD_SET_MESSAGE_INTERVAL: [
+        v20.MAV_RESULT_ACCEPTED, v20.MAV_RESULT_UNSUPPORTED, v20.MAV_RESULT_ACCEPTED]},
+     ("warning", "vehicle 1: telemetry rate refused for ATTITUDE (UNSUPPORTED): streamed at "
+                 "the autopilot's own rate")),
+    ("sim", {}, None),
+])
+def test_manager_asks_a_real_autopilot_for_the_telemetry_the_gcs_reads(
+        kind: str, script: dict[int, list[Any]], note: tuple[str, str] | None) -> None:
+    notes: list[tuple[str, str]] = []
+    noted = threading.Event()
+
+    def on_note(level: str, text: str) -> None:
+        notes.append((level, text))
+        noted.set()
+
+    positions: list[float] = []
+    config = LinkConfig(sysid=VEHICLE, transport="udpin:127.0.0.1:0", profile=kind)
+    with LinkManager([config], check_period_s=0.05, on_note=on_note) as manager:
+        link = manager.links[VEHICLE]
+        link.add_record_listener(lambda r: positions.append(time.monotonic())
+                                 if isinstance(r, LocalPosition) else None)
+        peer = start_peer(link, kind, script=script, position_rate_hz=2.0)
+        try:
+            noted.wait(3.0)
+            time.sleep(0.5)
+            since = time.monotonic()
+            time.sleep(1.0)
+            rate = sum(1 for t in positions if t >= since) / (time.monotonic() - since)
+        finally:
+            peer.stop()
+    asked = [(int(r.msg.param1), r.msg.param2)
+             for r in peer.commands(v20.MAV_CMD_SET_MESSAGE_INTERVAL)]
+    if note is None:  # the simulated vehicles stream what the GCS needs: nothing asked
+        assert asked == [] and notes == [] and rate < 5.0
+        return
+    assert notes == [note]
+    assert asked == [(v20.MAVLINK_MSG_ID_LOCAL_POSITION_NED, 50_000.0),
+                     (v20.MAVLINK_MSG_ID_ATTITUDE, 50_000.0),
+                     (v20.MAVLINK_MSG_ID_SYS_STATUS, 1_000_000.0)]
+    assert rate > 15.0  # was 2 Hz before the request
 
 
 def test_ardupilot_peer_refuses_arming_outside_guided(udp_link: Link) -> None:

@@ -87,6 +87,10 @@ def test_gcs_link_config_and_zenoh_settings() -> None:
         from_mapping(GcsLinkConfig, {"fleet": "lab/*"}, "gcs.yaml")
     with pytest.raises(ConfigError, match=r"^gcs\.yaml: zenoh\.mode: must be one of"):
         from_mapping(GcsLinkConfig, {"zenoh": {"mode": "router"}}, "gcs.yaml")
+    with pytest.raises(ConfigError) as info:  # MAVProxy's and QGC's id: never ours
+        from_mapping(GcsLinkConfig, {"system_id": 255}, "gcs.yaml")
+    assert str(info.value).startswith("gcs.yaml: system_id: 255 is what MAVProxy and "
+                                      "QGroundControl use")
 
 
 def test_manager_opens_udp_links_with_signing_keys_relative_to_the_config(tmp_path: Path) -> None:

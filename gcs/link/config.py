@@ -90,6 +90,10 @@ class GcsLinkConfig:
             check_fleet(self.fleet)
         except ValueError as exc:
             raise ValueError(f"fleet: {exc}") from None
+        if self.system_id == 255:
+            raise ValueError("system_id: 255 is what MAVProxy and QGroundControl use, and an "
+                             "autopilot could take their frames for ours; choose another "
+                             f"(default {DEFAULT_GCS_SYSTEM_ID})")
 
 
 def check_links(links: Sequence[LinkConfig], *, gcs_system_id: int, source: str,

@@ -3,7 +3,10 @@
 :class:`LinkManager` builds one transport, :class:`~gcs.link.link.Link` and
 autopilot profile per configured vehicle, shares one zenoh session among the
 zenoh links, and feeds :class:`~gcs.link.discovery.Discovery` from zenoh
-liveliness tokens and from the links' heartbeats.
+liveliness tokens and from the links' heartbeats. A vehicle heard for the
+first time is prepared by its profile on a thread of its own (the telemetry
+rates a real autopilot is asked for, :meth:`AutopilotProfile.prepare`); what
+it refuses is reported through ``on_note``.
 """
 
 from __future__ import annotations
@@ -20,7 +23,7 @@ import zenoh
 
 from gcs.link.config import ZENOH, GcsLinkConfig, LinkConfig, check_links
 from gcs.link.discovery import Discovery, PresenceEvent, PresenceSource
-from gcs.link.errors import LinkError
+from gcs.link.errors import CommandResult, LinkError
 from gcs.link.keys import Direction
 from gcs.link.link import Link
 from gcs.link.mavutil_transport import MavutilTransport
@@ -47,12 +50,15 @@ class LinkManager:
                  base_dir: str | Path = ".", session: zenoh.Session | None = None,
                  clock: Callable[[], float] = time.monotonic,
                  on_presence: Callable[[PresenceEvent], None] | None = None,
+                 on_note: Callable[[str, str], None] | None = None,
                  check_period_s: float = 0.1) -> None:
         self._settings = settings if settings is not None else GcsLinkConfig()
         check_links(links, gcs_system_id=self._settings.system_id, source="<links>")
         self._base_dir = Path(base_dir)
         self._clock = clock
         self._check_period_s = check_period_s
+        self._on_note = on_note
+        self._prepared: set[int] = set()  # vehicles whose profile ran prepare() (check loop)
         self.discovery = Discovery((c.sysid for c in links), clock=clock, on_event=on_presence)
         """Presence of the vehicles."""
         self._owns_session = False
@@ -182,6 +188,32 @@ class LinkManager:
             for sysid, link in list(self._links.items()):
                 try:  # one link's fault must not stop every link's heartbeat
                     link.service(now)
-                    self.discovery.report(sysid, link.health.alive, PresenceSource.HEARTBEAT)
+                    alive = link.health.alive
+                    self.discovery.report(sysid, alive, PresenceSource.HEARTBEAT)
+                    if alive and sysid not in self._prepared:
+                        self._prepared.add(sysid)
+                        threading.Thread(target=self._prepare, args=(sysid,), daemon=True,
+                                         name=f"link-prepare-{sysid}").start()
                 except Exception:
                     _log.exception("link %d: heartbeat or presence check failed", sysid)
+
+    def _prepare(self, sysid: int) -> None:
+        """Run the vehicle's :meth:`AutopilotProfile.prepare` (it blocks on acks); report what
+        it refused, or why it failed, as one note."""
+        try:
+            results = self._profiles[sysid].prepare()
+        except LinkError as exc:
+            self._note("warning", f"{exc}: telemetry rates not set")
+            return
+        refused = [f"{name} ({result.name})" for name, result in results.items()
+                   if result is not CommandResult.ACCEPTED]
+        if refused:
+            self._note("warning", f"vehicle {sysid}: telemetry rate refused for "
+                                  f"{', '.join(refused)}: streamed at the autopilot's own rate")
+        elif results:
+            self._note("info", f"vehicle {sysid}: telemetry rates set for {', '.join(results)}")
+
+    def _note(self, level: str, text: str) -> None:
+        _log.log(logging.WARNING if level == "warning" else logging.INFO, "%s", text)
+        if self._on_note is not None:
+            self._on_note(level, text)

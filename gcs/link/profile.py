@@ -10,18 +10,28 @@ All methods block; run them off the 4 Hz loop's thread.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from enum import Enum
+from types import MappingProxyType
 from typing import Protocol
 
 from gcs.link.dialect import mavlink
-from gcs.link.errors import LinkError
+from gcs.link.errors import CommandResult, LinkError
 from gcs.link.link import Link
 from gcs.link.modes import CUSTOM_MODE_ENABLED
 from gcs.link.setpoints import SetpointKind
 from gcs.link.telemetry import Heartbeat, LocalPosition, Telemetry
 
-__all__ = ["AutopilotProfile", "ProfileBase", "ProfileName"]
+__all__ = ["FLIGHT_TELEMETRY_RATES_HZ", "AutopilotProfile", "ProfileBase", "ProfileName"]
+
+FLIGHT_TELEMETRY_RATES_HZ: Mapping[str, float] = MappingProxyType({
+    "LOCAL_POSITION_NED": 20.0,
+    "ATTITUDE": 20.0,
+    "SYS_STATUS": 1.0,
+})
+"""What the GCS reads from a real autopilot, Hz: position and velocity for the guidance (five
+samples per 4 Hz tick) and ArduPilot's vertical loop, attitude for tilt and the rope pull
+estimate, SYS_STATUS for the battery. Nothing more: a telemetry radio's bandwidth is shared."""
 
 
 class ProfileName(Enum):
@@ -113,6 +123,14 @@ class AutopilotProfile(Protocol):
         """Land where the vehicle is."""
         ...
 
+    def prepare(self) -> dict[str, CommandResult]:
+        """Once, when the vehicle is first heard: ask for the telemetry the GCS needs.
+
+        Returns each request's result (empty when nothing is asked); a
+        refusal is the caller's to report, never an error.
+        """
+        ...
+
 
 class ProfileBase:
     """Steps shared by all profiles: arming, confirmed mode changes, autopilot check."""
@@ -122,6 +140,9 @@ class ProfileBase:
 
     vertical_is_z: bool = False
     """See :attr:`AutopilotProfile.vertical_is_z`."""
+
+    telemetry_rates_hz: Mapping[str, float] = MappingProxyType({})
+    """What :meth:`prepare` asks for (SET_MESSAGE_INTERVAL); empty: the vehicle's own rates."""
 
     def __init__(self, link: Link, *, confirm_timeout_s: float = 3.0) -> None:
         self._link = link
@@ -140,6 +161,12 @@ class ProfileBase:
             self._link.send_setpoint(accel_xy_ned=accel_xy_ned, az_ned=vertical)
         else:
             self._link.send_setpoint(accel_xy_ned=accel_xy_ned, z_ned=vertical)
+
+    def prepare(self) -> dict[str, CommandResult]:
+        """Ask for :attr:`telemetry_rates_hz`; each message's result (see the protocol)."""
+        if not self.telemetry_rates_hz:
+            return {}
+        return self._link.request_telemetry(self.telemetry_rates_hz)
 
     def mode_text(self, heartbeat: Heartbeat | None = None) -> str:
         """Flight mode of ``heartbeat`` (default: the latest), readable; ``"unknown"`` if none.

@@ -4,7 +4,14 @@ ArduCopter takes position, velocity and acceleration targets only as whole
 three-axis groups; with acceleration only there is no altitude hold, so the
 GCS closes the vertical loop from LOCAL_POSITION_NED with
 :class:`VerticalPd` and sends ``afz`` (:data:`~gcs.link.setpoints.MASK_ACCEL`).
-``GUID_TIMEOUT`` (3 s) zeroes the targets if setpoints stop.
+The loop runs at telemetry rate: every LOCAL_POSITION_NED that arrives while
+the GCS streams setpoints gets a setpoint of its own, with the horizontal
+acceleration last sent and ``afz`` from that very position, so the altitude
+loop does not wait for the 4 Hz guidance (or its re-sends) to see a climb.
+``GUID_TIMEOUT`` (3 s) zeroes the targets if setpoints stop. On first contact
+the profile asks for LOCAL_POSITION_NED and ATTITUDE at 20 Hz
+(:meth:`~gcs.link.profile.ProfileBase.prepare`), far above ArduPilot's
+default stream rates on most ports.
 
 Take-off: MAV_CMD_DO_SET_MODE GUIDED (4), arm, MAV_CMD_NAV_TAKEOFF (param7 =
 altitude above home, m). Land: MAV_CMD_DO_SET_MODE LAND (9).
@@ -13,13 +20,18 @@ altitude above home, m). Land: MAV_CMD_DO_SET_MODE LAND (9).
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass
 
 from gcs.link.dialect import mavlink
+from gcs.link.errors import LinkError
 from gcs.link.link import Link
 from gcs.link.modes import CopterMode, copter_mode_text
-from gcs.link.profile import ProfileBase, ProfileName
-from gcs.link.setpoints import SetpointKind
+from gcs.link.profile import FLIGHT_TELEMETRY_RATES_HZ, ProfileBase, ProfileName
+from gcs.link.setpoints import SETPOINT_MESSAGE, SetpointKind
+from gcs.link.telemetry import LocalPosition, Record
+from gcs.link.transport import FrameDirection
+from gcs.link.unpack import unpack_v2
 from gcs.typed_config import field
 
 __all__ = ["ArduPilotProfile", "VerticalPd"]
@@ -57,14 +69,25 @@ class ArduPilotProfile(ProfileBase):
     streaming_mode = CopterMode.GUIDED.name
     landing_modes = frozenset(m.name for m in (CopterMode.LAND, CopterMode.RTL,
                                                CopterMode.SMART_RTL))
+    telemetry_rates_hz = FLIGHT_TELEMETRY_RATES_HZ
 
     def __init__(self, link: Link, *, confirm_timeout_s: float = 3.0,
-                 vertical: VerticalPd | None = None, max_position_age_s: float = 0.5) -> None:
+                 vertical: VerticalPd | None = None, max_position_age_s: float = 0.5,
+                 follow_s: float = 0.5) -> None:
         super().__init__(link, confirm_timeout_s=confirm_timeout_s)
         self.vertical = vertical if vertical is not None else VerticalPd()
         """The vertical loop closed on the GCS."""
         self.max_position_age_s = max_position_age_s
         """Oldest LOCAL_POSITION_NED the vertical loop may use, s."""
+        self.follow_s = follow_s
+        """Positions get setpoints of their own while the caller's last one is this recent, s
+        (the GCS loop re-sends at 12 Hz: older means it stopped streaming)."""
+        self._lock = threading.Lock()
+        self._z_ref: float | None = None  # the caller's latest altitude target, m (NED)
+        self._z_ref_at = -math.inf  # link clock time of that target
+        self._accel_xy = (0.0, 0.0)  # horizontal acceleration last sent, m/s^2
+        link.add_frame_listener(self._on_frame)
+        link.add_record_listener(self._on_record)
 
     @property
     def name(self) -> ProfileName:
@@ -98,13 +121,57 @@ class ArduPilotProfile(ProfileBase):
             self.send_setpoint(accel_xy_ned=(0.0, 0.0), z_ned=z_ned)
 
     def vertical_setpoint(self, z_ned: float) -> float:
-        """``afz`` from :attr:`vertical` and the latest position (acceleration on three axes)."""
+        """``afz`` from :attr:`vertical` and the latest position (acceleration on three axes).
+
+        Called for every setpoint the GCS sends; ``z_ned`` becomes the target
+        the positions arriving until the next call are steered to.
+        """
         position = self._position(max_age_s=self.max_position_age_s)
-        return self.vertical.accel_down(z_ref_ned=z_ned, z_ned=position.p_ned[2],
-                                        vz_ned=position.v_ned[2])
+        az = self.vertical.accel_down(z_ref_ned=z_ned, z_ned=position.p_ned[2],
+                                      vz_ned=position.v_ned[2])
+        with self._lock:
+            self._z_ref, self._z_ref_at = z_ned, self.link.clock()
+        return az
+
+    def _on_frame(self, direction: FrameDirection, frame: bytes) -> None:
+        """Remember the horizontal acceleration of every setpoint sent (under the send lock:
+        quick, and never sends)."""
+        if direction is not FrameDirection.OUT or len(frame) < 12 or frame[0] != 0xFD:
+            return
+        if int.from_bytes(frame[7:10], "little") != SETPOINT_MESSAGE.id:
+            return
+        msg = unpack_v2(bytearray(frame), msgid=SETPOINT_MESSAGE.id,
+                        signature_len=13 if frame[2] & 1 else 0)
+        if msg is not None:
+            with self._lock:
+                self._accel_xy = (float(msg.afx), float(msg.afy))
+
+    def _on_record(self, record: Record) -> None:
+        """A new position while the GCS streams: a setpoint with ``afz`` from it (receive
+        thread)."""
+        if not isinstance(record, LocalPosition):
+            return
+        with self._lock:
+            z_ref, accel_xy = self._z_ref, self._accel_xy
+            fresh = record.received_at - self._z_ref_at <= self.follow_s
+        if z_ref is None or not fresh:
+            return
+        hb = self.link.telemetry.heartbeat
+        if hb is None or hb.custom_mode != CopterMode.GUIDED:
+            return  # GUIDED flies setpoints; in LAND or RTL they would be refused
+        try:
+            az = self.vertical.accel_down(z_ref_ned=z_ref, z_ned=record.p_ned[2],
+                                          vz_ned=record.v_ned[2])
+            self.link.send_setpoint(accel_xy_ned=accel_xy, az_ned=az)
+        except (ValueError, LinkError):
+            return  # a bad position or a closed link: the GCS loop reports its own sends
 
     def set_mode(self, mode: CopterMode) -> None:
-        """Any ArduCopter mode by MAV_CMD_DO_SET_MODE, confirmed."""
+        """Any ArduCopter mode by MAV_CMD_DO_SET_MODE, confirmed; leaving GUIDED ends the
+        setpoints sent per position until the caller streams again."""
+        if mode != CopterMode.GUIDED:
+            with self._lock:
+                self._z_ref = None
         self._set_mode(int(mode), what=CopterMode(mode).name)
 
     def land(self) -> None:

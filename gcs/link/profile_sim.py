@@ -27,6 +27,8 @@ class SimProfile(ProfileBase):
     streaming_mode = SimMode.OFFBOARD.name
     landing_modes = frozenset({SimMode.LAND.name})
     vertical_is_z = True
+    # telemetry_rates_hz stays empty: the simulated vehicles stream position and attitude at
+    # 50 Hz of sim time from the start (vehicles.streams), more than the GCS would ask for.
 
     @property
     def name(self) -> ProfileName:
