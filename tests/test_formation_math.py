@@ -7,8 +7,16 @@ import pytest
 
 from gcs.config import load_team
 from gcs.formation import build_formation, is_infinitesimally_rigid
-from gcs.guidance import Guidance, MotionDemand, formation_acceleration, saturate
+from gcs.guidance import (
+    Guidance,
+    MotionDemand,
+    formation_acceleration,
+    relative_measurements,
+    saturate,
+)
 from gcs.motion import centripetal_matrix, edges_to_slots, motion_basis
+from gcs.udi import to_ned_saturated
+from tests.double_integrator import yaw_rotations
 
 SQUARE = "configs/bebop_square.yaml"
 TEAMS = [SQUARE, "configs/bebop_triangle.yaml", "configs/bebop_hexagon.yaml"]
@@ -90,15 +98,16 @@ def test_proposition_1_centripetal_term(config: str, vx: float, vy: float, omega
     np.testing.assert_allclose(a, omega * np.column_stack((-v[:, 1], v[:, 0])), atol=1e-12)
 
 
-def test_kernel_is_eq_udi_in_stacked_form() -> None:
+@pytest.mark.parametrize("config", TEAMS)
+def test_kernel_is_eq_udi_in_stacked_form(config: str) -> None:
     """Per-vehicle kernel (lead 0) == u = -c1 v - c2 Bbar D_z D_ztilde e + Abar D_ztilde z."""
-    team = load_team(SQUARE)
+    team = load_team(config)
     f = team.formation
     g = Guidance.from_team(team)
     rng = np.random.default_rng(1)
     p = f.positions + rng.normal(0, 0.15, f.positions.shape)
     v = rng.normal(0, 0.5, p.shape)
-    c1, c2 = 0.17, 0.55
+    c1, c2 = g.c1, g.c2
     A = c1 * g.basis.velocity_matrix(0.3, 0.1, 0.2, 1.0)  # any A on the vehicles' own edges
     z = f.relative(p)
     nz = np.linalg.norm(z, axis=1)
@@ -172,7 +181,7 @@ def reference_udi(v_own: np.ndarray, rel_p: np.ndarray, rel_v: np.ndarray, mask:
             + np.einsum("is,isk->ik", alpha_a - c2 * e, unit_ahead))
 
 
-@pytest.mark.parametrize("config", [SQUARE, "configs/bebop_hexagon.yaml"])
+@pytest.mark.parametrize("config", TEAMS)
 def test_compiled_guidance_matches_the_law_written_as_arrays(config: str) -> None:
     """Hold-compensated eq. udi in each vehicle's frame, rotated back to NED and saturated."""
     team = load_team(config)
@@ -185,9 +194,7 @@ def test_compiled_guidance_matches_the_law_written_as_arrays(config: str) -> Non
         yaw = rng.uniform(-np.pi, np.pi, f.n)
         demand = MotionDemand(*rng.uniform(-1, 1, 3), scale=float(rng.uniform(0.8, 1.2)))
         alpha_v, alpha_a, d = g.coefficients(demand)
-        # what each vehicle senses, in its own frame (rotation by -yaw)
-        c, s = np.cos(-yaw), np.sin(-yaw)
-        rot = np.stack((np.stack((c, -s), -1), np.stack((s, c), -1)), -2)  # (n, 2, 2)
+        rot = yaw_rotations(-yaw)  # what each vehicle senses is in its own frame
         nb, mask = f.slot_neighbour, f.slot_mask
         rel_p = np.einsum("ikl,isl->isk", rot, (p[nb] - p[:, None]) * mask[..., None])
         rel_v = np.einsum("ikl,isl->isk", rot, (v[nb] - v[:, None]) * mask[..., None])
@@ -202,7 +209,7 @@ def test_compiled_guidance_matches_the_law_written_as_arrays(config: str) -> Non
         assert np.linalg.norm(expected, axis=1).max() <= g.accel_norm + 1e-12
 
 
-@pytest.mark.parametrize("config", ["configs/bebop_square.yaml", "configs/bebop_hexagon.yaml"])
+@pytest.mark.parametrize("config", TEAMS)
 def test_compiled_distance_errors_are_the_norms_of_the_edge_vectors(config: str) -> None:
     formation = load_team(config).formation
     rng = np.random.default_rng(3)
@@ -211,3 +218,59 @@ def test_compiled_distance_errors_are_the_norms_of_the_edge_vectors(config: str)
         z = formation.relative(p)
         assert formation.distance_errors(p, scale) == pytest.approx(
             np.linalg.norm(z, axis=1) - scale * formation.distances)
+
+
+@pytest.mark.parametrize("config", TEAMS)
+def test_each_vehicle_senses_in_its_own_frame_and_commands_go_back_by_its_yaw(
+        config: str) -> None:
+    """rel_p[i, s] = R(-yaw_i)(p_j - p_i), likewise v_i and v_j - v_i; NED = R(yaw_i) local.
+
+    Eq. udi is rotation-equivariant: fed NED data and returning its command
+    unrotated, the guidance sends the same physical accelerations, so no test of
+    the closed loop or of invariance sees a dropped rotation. This one does.
+    """
+    g = Guidance.from_team(load_team(config))
+    f = g.formation
+    rng = np.random.default_rng(5)
+    p = rng.normal(0, 2.0, (f.n, 3))  # NED with altitude, as telemetry has it
+    v = rng.normal(0, 1.0, (f.n, 3))
+    yaw = rng.permutation(np.linspace(0.3, 2.8, f.n))  # distinct, none 0 or pi
+    meas = relative_measurements(f, p, v, yaw)
+    to_own = yaw_rotations(-yaw)
+    for i in range(f.n):
+        np.testing.assert_allclose(meas.v_own[i], to_own[i] @ v[i, :2], rtol=0, atol=1e-12)
+        for s in range(f.slot_mask.shape[1]):
+            if not f.slot_mask[i, s]:
+                assert not meas.rel_p[i, s].any() and not meas.rel_v[i, s].any()
+                continue
+            tail, head = f.edges[f.slot_edge[i, s]]
+            j = head if tail == i else tail  # the neighbour, from the edge list
+            np.testing.assert_allclose(meas.rel_p[i, s], to_own[i] @ (p[j, :2] - p[i, :2]),
+                                       rtol=0, atol=1e-12)
+            np.testing.assert_allclose(meas.rel_v[i, s], to_own[i] @ (v[j, :2] - v[i, :2]),
+                                       rtol=0, atol=1e-12)
+    assert f.slot_mask.sum() == 2 * f.m  # every edge seen from both ends
+
+    u = rng.normal(0, 1.0, (f.n, 2))  # any command in the vehicles' frames, unlimited
+    to_ned = yaw_rotations(yaw)
+    np.testing.assert_allclose(to_ned_saturated(u, yaw, np.inf, np.inf),
+                               np.einsum("ikl,il->ik", to_ned, u), rtol=0, atol=1e-12)
+    demand = MotionDemand(forward=0.4, rotate=0.3)  # and through the guidance, unsaturated
+    near = np.c_[f.positions + rng.normal(0, 0.05, f.positions.shape), np.zeros(f.n)]
+    local = g.local(relative_measurements(f, near, 0.1 * v, yaw), demand)
+    assert np.abs(local).max() < g.accel_axis / 2
+    np.testing.assert_allclose(g.accelerations(near[:, :2], 0.1 * v[:, :2], yaw, demand),
+                               np.einsum("ikl,il->ik", to_ned, local), rtol=0, atol=1e-12)
+
+
+def test_a_vehicle_facing_east_sees_north_on_its_left_and_forward_is_east() -> None:
+    """The sign of the frames, in NED (x north, y east, yaw clockwise from north)."""
+    f = load_team(SQUARE).formation
+    east = np.full(f.n, np.pi / 2)
+    p = np.zeros((f.n, 2))
+    p[f.slot_neighbour[0, 0]] = [1.0, 0.0]  # vehicle 0's first neighbour 1 m north of it
+    meas = relative_measurements(f, p, np.zeros((f.n, 2)), east)
+    np.testing.assert_allclose(meas.rel_p[0, 0], [0.0, -1.0], atol=1e-12)  # left: -y (body)
+    forward = np.tile([1.0, 0.0], (f.n, 1))
+    np.testing.assert_allclose(to_ned_saturated(forward, east, np.inf, np.inf),
+                               np.tile([0.0, 1.0], (f.n, 1)), atol=1e-12)  # east
