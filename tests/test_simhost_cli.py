@@ -9,6 +9,7 @@ from __future__ import annotations
 import contextlib
 import itertools
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -18,6 +19,8 @@ from pathlib import Path
 
 import pytest
 import zenoh
+from pymavlink import mavutil
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from gcs.link import ZenohSettings, keys, open_session
 from gcs.link.clockwire import decode_clock, encode_time
@@ -161,3 +164,64 @@ def test_duration_runs_as_fast_as_possible_and_exits_by_itself() -> None:
     assert proc.returncode == 0, err
     assert "sim: stopped at t = 3.000 s" in err
     assert time.monotonic() - start_wall < 30.0
+
+
+def free_udp_ports(count: int) -> int:
+    """A base port with ``count`` consecutive free UDP ports on loopback."""
+    for _ in range(50):
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+            probe.bind(("127.0.0.1", 0))
+            base = probe.getsockname()[1]
+        try:
+            with contextlib.ExitStack() as stack:
+                for k in range(count):
+                    sock = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+                    sock.bind(("127.0.0.1", base + k))
+            return base
+        except OSError:
+            continue
+    raise RuntimeError(f"no {count} consecutive free UDP ports")
+
+
+def test_gcs_sim_hosts_the_team_with_sitl_style_udp_ports_and_stops_on_sigint() -> None:
+    """``gcs sim`` hands its options to the simulator: a pymavlink client on vehicle 2's UDP
+    port gets that vehicle's HEARTBEAT and an acknowledged command, as from a SITL."""
+    base = free_udp_ports(4)
+    endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
+    proc = subprocess.Popen([sys.executable, "-m", "gcs", "sim", "--config", str(CONFIG),
+                             "--listen", endpoint, "--fleet", f"gcssim-{uuid.uuid4().hex[:8]}",
+                             "--udp", "--udp-base-port", str(base), "--udp-gcs-port", "0"],
+                            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout is not None
+        ready = proc.stdout.readline().strip()
+        assert ready.startswith("sim ready: ") and f"2=127.0.0.1:{base + 1}" in ready, ready
+        client = mavutil.mavlink_connection(f"udpout:127.0.0.1:{base + 1}", source_system=200,
+                                            source_component=190)
+        try:
+            deadline = time.monotonic() + 10.0
+            heartbeat = ack = None
+            while (heartbeat is None or ack is None) and time.monotonic() < deadline:
+                client.mav.heartbeat_send(6, 8, 0, 0, 0)  # a GCS: the vehicle learns our port
+                client.mav.command_long_send(2, 1, mavlink2.MAV_CMD_SET_MESSAGE_INTERVAL, 0,
+                                             mavlink2.MAVLINK_MSG_ID_SYS_STATUS, 200_000,
+                                             0, 0, 0, 0, 0)
+                msg = client.recv_match(type=["HEARTBEAT", "COMMAND_ACK"], blocking=True,
+                                        timeout=0.5)
+                if msg is not None and msg.get_srcSystem() == 2:
+                    if msg.get_type() == "HEARTBEAT":
+                        heartbeat = msg
+                    else:
+                        ack = msg
+        finally:
+            client.close()
+        assert heartbeat is not None and heartbeat.type == mavlink2.MAV_TYPE_QUADROTOR
+        assert ack is not None and ack.result == mavlink2.MAV_RESULT_ACCEPTED
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=15)
+        assert proc.returncode == 0, err
+        assert "sim: stopped at t = " in err
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate(timeout=10)

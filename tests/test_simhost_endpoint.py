@@ -424,3 +424,34 @@ def test_the_loop_gets_a_setpoint_before_its_echo_leaves() -> None:
     assert sent_at_hand_over == [0] and len(taken) == 1
     (echo,) = of_type(b.received(), "POSITION_TARGET_LOCAL_NED")
     assert (echo.afx, echo.afy) == pytest.approx((0.2, -0.1))
+
+
+def test_a_retried_command_is_answered_again_but_carried_out_once() -> None:
+    """A GCS resends a command whose ack it lost (confirmation 1, 2, ...): a take-off is not
+    retargeted from where the first copy got to, and the answer is the first one's."""
+    b = bench()
+    b.run(0.05)
+    b.command(ARM, 1)
+    takeoff = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.4]  # below the taut rope (about 0.87 m)
+    b.send(b.gcs.mav.command_long_encode(SYSID, 1, TAKEOFF, 0, *takeoff))
+    b.run(1.0)  # climbing: about 0.3 m up
+    b.send(b.gcs.mav.command_long_encode(SYSID, 1, TAKEOFF, 1, *takeoff))  # ack was "lost"
+    b.run(3.5)
+    got = b.received()
+    assert acks(got) == [(ARM, ACCEPTED), (TAKEOFF, ACCEPTED), (TAKEOFF, ACCEPTED)]
+    assert of_type(got, "LOCAL_POSITION_NED")[-1].z == pytest.approx(-0.4, abs=0.1)  # not 0.7
+    # a retry of a TEMPORARILY_REJECTED command is tried again: arming before any position
+    fresh = bench()
+    fresh.command(ARM, 1)
+    fresh.run(0.05)
+    fresh.send(fresh.gcs.mav.command_long_encode(SYSID, 1, ARM, 1, 1.0, 0, 0, 0, 0, 0, 0))
+    assert acks(fresh.received()) == [(ARM, mavlink.MAV_RESULT_TEMPORARILY_REJECTED),
+                                      (ARM, ACCEPTED)]
+
+
+def test_command_int_is_answered_unsupported() -> None:
+    b = bench()
+    b.send(b.gcs.mav.command_int_encode(SYSID, 1, mavlink.MAV_FRAME_GLOBAL, TAKEOFF, 0, 0,
+                                        0, 0, 0, 0, 0, 0, 10.0))
+    assert acks(b.received()) == [(TAKEOFF, mavlink.MAV_RESULT_UNSUPPORTED)]
+    assert b.autopilot.mode(0) is Mode.DISARMED

@@ -11,7 +11,11 @@ contract in ``gcs/link/README.md``) lives here, between the bytes and the
 - HEARTBEAT (1 Hz, and at once after every mode change), telemetry at rates
   set by ``SET_MESSAGE_INTERVAL`` (:mod:`vehicles.streams`), times from sim time;
 - COMMAND_LONG answered by COMMAND_ACK (:mod:`vehicles.commands`), refusals
-  explained by STATUSTEXT;
+  explained by STATUSTEXT; a retry (``confirmation`` > 0) of the command just
+  carried out gets the same answer without being carried out again (a resent
+  NAV_TAKEOFF whose ack was lost must not climb again from where the first
+  one got to), unless the first was TEMPORARILY_REJECTED; COMMAND_INT is
+  answered UNSUPPORTED, as a GCS expects an answer;
 - acceleration setpoints checked (:mod:`vehicles.setpoint_check`), each
   accepted one echoed at once as POSITION_TARGET_LOCAL_NED (PX4's target
   report), each refused one reported by STATUSTEXT and never flown;
@@ -46,7 +50,7 @@ from gcs.link.signing import SigningKey
 from gcs.link.telemetry import Severity
 from vehicles.autopilot import Autopilot
 from vehicles.battery import Battery
-from vehicles.commands import MavResult, execute_command
+from vehicles.commands import CommandOutcome, MavResult, execute_command
 from vehicles.reports import CommCounters, VehicleView, build_report, time_boot_ms
 from vehicles.setpoint_check import Refusal, SetpointLimits, check_setpoint
 from vehicles.state import Measurements
@@ -60,6 +64,9 @@ COMPONENT_ID = 1
 _STATUSTEXT_LEN = 50
 _REFUSAL_REPORT_PERIOD = 1.0
 """At most one STATUSTEXT per refusal reason per this much sim time, s (all are counted)."""
+
+_RETRY_WINDOW_S = 5.0
+"""A command resent (confirmation > 0) this soon after the same one is a retry, sim s."""
 
 
 @dataclass(frozen=True)
@@ -130,8 +137,11 @@ class VehicleEndpoint:
         self._commands = 0
         self._accepted = 0
         self._refused = 0
+        self._last_command: tuple[tuple[object, ...], float, CommandOutcome] | None = None
+        """The last COMMAND_LONG carried out: its key, sim time and outcome (loop thread)."""
         self._handlers: dict[str, Callable[[MavMessage, float], None]] = {
             "COMMAND_LONG": self._command_long,
+            "COMMAND_INT": self._command_int,
             "TIMESYNC": self._timesync,
         }
 
@@ -204,12 +214,30 @@ class VehicleEndpoint:
     def _command_long(self, msg: MavMessage, t: float) -> None:
         with self._rx_lock:
             self._commands += 1
-        outcome = execute_command(msg, self._autopilot, self._index, self._streams, t)
-        self._emit(self._encoder.mav.command_ack_encode(
-            msg.command, int(outcome.result), 0, 0, msg.get_srcSystem(), msg.get_srcComponent()))
-        if outcome.result is not MavResult.ACCEPTED and outcome.reason:
-            self._status_text(Severity.WARNING, outcome.reason)
+        key = (msg.get_srcSystem(), msg.get_srcComponent(), msg.command, msg.param1,
+               msg.param2, msg.param3, msg.param4, msg.param5, msg.param6, msg.param7)
+        last = self._last_command
+        if (msg.confirmation > 0 and last is not None and last[0] == key
+                and t - last[1] <= _RETRY_WINDOW_S
+                and last[2].result is not MavResult.TEMPORARILY_REJECTED):
+            outcome = last[2]  # a retry whose first copy was carried out: the same answer
+        else:
+            outcome = execute_command(msg, self._autopilot, self._index, self._streams, t)
+            self._last_command = (key, t, outcome)
+            if outcome.result is not MavResult.ACCEPTED and outcome.reason:
+                self._status_text(Severity.WARNING, outcome.reason)
+        self._ack(msg, outcome.result)
         self._heartbeat_if_mode_changed(t)
+
+    def _command_int(self, msg: MavMessage, t: float) -> None:
+        """No command is taken in COMMAND_INT form here: say so rather than stay silent."""
+        with self._rx_lock:
+            self._commands += 1
+        self._ack(msg, MavResult.UNSUPPORTED)
+
+    def _ack(self, msg: MavMessage, result: MavResult) -> None:
+        self._emit(self._encoder.mav.command_ack_encode(
+            msg.command, int(result), 0, 0, msg.get_srcSystem(), msg.get_srcComponent()))
 
     def _check(self, msg: MavMessage, t: float,
                reports: list[MavMessage]) -> AccelSetpoint | None:
