@@ -17,6 +17,11 @@ The mapping from SDL axis and button numbers is a YAML file
   says so; ``gcs demo``/``gcs run`` allow it while no browser holds control
   (web/README.md). Taking control in a browser silences the pad and centres
   sticks it held deflected; the abort button works always, as in every browser.
+* Fault tolerant: an exception from pygame or from a callback (the abort's
+  included) is reported once per distinct fault (``on_fault``, e.g. the page's
+  events, and the log) and the thread reads on; a pad that cannot be read is
+  treated as unplugged (its sticks centred). One bad event must not leave the
+  pilot without the abort button for the rest of the flight.
 """
 
 from __future__ import annotations
@@ -191,6 +196,11 @@ class GamepadMapper:
             self._active = False
 
 
+MAX_FAULTS_REPORTED = 20
+"""Distinct faults reported per reader; past this they are counted only (a fault that
+changes its text every poll must not flood the page's events or the log)."""
+
+
 class Gamepad:
     """Reads the pad on its own thread; ``start()`` then ``close()``.
 
@@ -204,21 +214,29 @@ class Gamepad:
         on_abort: called when the abort button is pressed (on the pad's thread).
         on_resume: called when the resume button (if mapped) is pressed (same thread).
         may_steer: whether the pad may steer now (asked on the pad's thread).
+        on_fault: told (one line, pad's thread) the first time each distinct fault
+            happens; the thread goes on reading. The default only logs.
     """
 
     def __init__(self, config: GamepadConfig, operator: OperatorCommand, clock: Clock, *,
                  on_abort: Callable[[], None],
                  on_resume: Callable[[], None] = lambda: None,
-                 may_steer: Callable[[], bool] = lambda: True) -> None:
+                 may_steer: Callable[[], bool] = lambda: True,
+                 on_fault: Callable[[str], None] = lambda _text: None) -> None:
         self.mapper = GamepadMapper(config, operator, clock, on_abort=on_abort,
                                     on_resume=on_resume, may_steer=may_steer)
         self._config = config
+        self._on_fault = on_fault
+        self._reported: set[str] = set()
+        self.faults = 0
+        """Exceptions caught on the pad's thread so far (each distinct one reported once)."""
         self._stop = threading.Event()
         self._ready = threading.Event()
         self._error: str | None = None
         self._thread = threading.Thread(target=self._run, daemon=True, name="gamepad")
         self._pad = None  # the pygame Joystick in use
         self._pad_id = -1
+        self._rescan = False  # look for a pad at the next poll (dropped after a fault)
         self.name: str | None = None
         """Name of the pad in use, None while there is none."""
 
@@ -251,28 +269,81 @@ class Gamepad:
         period = 1.0 / self._config.poll_hz
         try:
             while not self._stop.wait(period):
-                for event in pygame.event.get():
-                    self._event(pygame, event)
-                pad = self._pad
-                if pad is not None:
-                    self.mapper.axes([pad.get_axis(k) for k in range(pad.get_numaxes())],
-                                     period)
+                self._poll(pygame, period)
         finally:
             pygame.joystick.quit()
             pygame.display.quit()
+
+    def _poll(self, pygame, period: float) -> None:  # type: ignore[no-untyped-def]
+        """One read of the pad; every step guarded on its own, so a fault in one event
+        (or in the axes) neither ends the thread nor drops the other events."""
+        try:
+            events = pygame.event.get()
+        except Exception as exc:
+            self._fault("reading events", exc)
+            events = []
+        for event in events:
+            try:
+                self._event(pygame, event)
+            except Exception as exc:
+                self._fault(f"handling {_event_name(pygame, event)}", exc)
+        if self._pad is None and self._rescan:  # dropped after a fault: take it back
+            self._rescan = False
+            try:
+                self._reopen(pygame)
+            except Exception as exc:
+                self._fault("opening the pad", exc)
+        pad = self._pad
+        if pad is None:
+            return
+        try:
+            axes = [pad.get_axis(k) for k in range(pad.get_numaxes())]
+        except Exception as exc:  # as if unplugged; looked for again at the next poll
+            self._fault("reading the axes", exc)
+            self._drop_pad()
+            self._rescan = True
+            return
+        try:
+            self.mapper.axes(axes, period)
+        except Exception as exc:
+            self._fault("applying the axes", exc)
+
+    def _fault(self, doing: str, exc: Exception) -> None:
+        """Report an exception once per distinct text (log and ``on_fault``); never raises."""
+        self.faults += 1
+        text = f"gamepad: {doing} failed: {type(exc).__name__}: {exc}"
+        if text in self._reported or len(self._reported) >= MAX_FAULTS_REPORTED:
+            return
+        self._reported.add(text)
+        _log.warning("%s (the gamepad reads on)", text, exc_info=exc)
+        try:
+            self._on_fault(text)
+        except Exception:  # a broken reporter must not end the thread either
+            _log.exception("gamepad: reporting a fault failed")
+
+    def _drop_pad(self) -> None:
+        """Forget the pad in use and centre its sticks."""
+        self._pad, self._pad_id, self.name = None, -1, None
+        try:
+            self.mapper.lost()
+        except Exception as exc:
+            self._fault("centring the sticks", exc)
 
     def _event(self, pygame, event) -> None:  # type: ignore[no-untyped-def]
         if event.type == pygame.JOYDEVICEADDED and self._pad is None:
             self._open(pygame, event.device_index)
         elif event.type == pygame.JOYDEVICEREMOVED and event.instance_id == self._pad_id:
             _log.warning("gamepad %s unplugged", self.name)
-            self.mapper.lost()
-            self._pad, self._pad_id, self.name = None, -1, None
-            for index in range(pygame.joystick.get_count()):
-                if self._open(pygame, index):
-                    break
+            self._drop_pad()
+            self._reopen(pygame)
         elif event.type == pygame.JOYBUTTONDOWN and event.instance_id == self._pad_id:
             self.mapper.button(event.button)
+
+    def _reopen(self, pygame) -> None:  # type: ignore[no-untyped-def]
+        """Use the first pad still plugged in that matches the config, if any."""
+        for index in range(pygame.joystick.get_count()):
+            if self._open(pygame, index):
+                return
 
     def _open(self, pygame, index: int) -> bool:  # type: ignore[no-untyped-def]
         """Use joystick ``index`` if its name matches the config."""
@@ -284,3 +355,11 @@ class Gamepad:
         _log.info("gamepad %s: %d axes, %d buttons", self.name, pad.get_numaxes(),
                   pad.get_numbuttons())
         return True
+
+
+def _event_name(pygame, event) -> str:  # type: ignore[no-untyped-def]
+    """The SDL event's name for a fault message (its number if pygame cannot name it)."""
+    try:
+        return str(pygame.event.event_name(event.type))
+    except Exception:
+        return f"event {getattr(event, 'type', '?')}"

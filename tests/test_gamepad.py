@@ -11,6 +11,10 @@ from __future__ import annotations
 import ctypes
 import glob
 import os
+import re
+import signal
+import subprocess
+import sys
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -21,8 +25,10 @@ from gcs.clock import WallClock
 from gcs.config import OperatorConfig, load_team
 from gcs.gamepad import Gamepad, GamepadConfig, GamepadMapper, load_gamepad_config
 from gcs.operator import OperatorCommand
+from gcs.simprocess import free_tcp_port
 from gcs.typed_config import ConfigError, from_mapping
 from web.control import ControlLock
+from web.launch import default_gamepad
 
 ROOT = Path(__file__).resolve().parents[1]
 MAPPING = ROOT / "configs" / "gamepad.yaml"
@@ -275,3 +281,134 @@ def test_a_plugged_pad_flies_and_unplugging_it_centres_the_sticks(reader) -> Non
         eventually(lambda: op.snapshot(clock.now()).demand.right > 0.99, "right")
     finally:
         again.unplug()
+
+
+class Failing:
+    """Raises ``exc`` the first ``times`` calls, then behaves as ``inner`` (if any)."""
+
+    def __init__(self, exc: Exception, times: int = 1,
+                 inner: Callable[..., object] = lambda *_a, **_k: None) -> None:
+        self.exc, self.left, self.inner, self.calls = exc, times, inner, 0
+
+    def __call__(self, *args: object, **kwargs: object) -> object:
+        self.calls += 1
+        if self.left > 0:
+            self.left -= 1
+            raise self.exc
+        return self.inner(*args, **kwargs)
+
+
+def test_a_failing_callback_or_pygame_call_does_not_end_the_reader(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The abort callback, pygame's event queue and an axis read each raise once: every
+    fault is reported once, and the pad still steers and aborts afterwards."""
+    os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+    sdl = _sdl()
+    import pygame
+
+    op, clock = operator()
+    aborts: list[float] = []
+    faults: list[str] = []
+    on_abort = Failing(RuntimeError("link down"), times=2,
+                       inner=lambda: aborts.append(clock.now()))
+    pad = Gamepad(load_gamepad_config(MAPPING), op, clock, on_abort=on_abort,
+                  on_fault=faults.append)
+    pad.start()
+    device = VirtualPad(sdl)
+    try:
+        eventually(lambda: pad.name is not None, "the pad to be picked up")
+        for _ in range(3):  # B three times: the first two aborts raise, the third gets through
+            device.button(1, True)
+            calls = on_abort.calls
+            eventually(lambda c=calls: on_abort.calls > c, "the abort callback")
+            device.button(1, False)
+            time.sleep(0.1)  # a few polls: SDL sees the release before the next press
+        assert len(aborts) == 1
+        assert faults == ["gamepad: handling JoyButtonDown failed: RuntimeError: link down"]
+
+        broken = Failing(pygame.error("event queue broke"), inner=pygame.event.get)
+        monkeypatch.setattr(pygame.event, "get", broken)
+        eventually(lambda: broken.calls > 2, "the reader to poll past the fault")
+        assert faults[-1] == "gamepad: reading events failed: error: event queue broke"
+
+        real_joystick = pygame.joystick.Joystick
+        axis_fault = Failing(pygame.error("device gone"), inner=None)  # type: ignore[arg-type]
+
+        class FlakyJoystick:
+            """The real joystick whose next axis read fails once."""
+
+            def __init__(self, index: int) -> None:
+                self._real = real_joystick(index)
+
+            def get_axis(self, axis: int) -> float:
+                if axis_fault.left > 0:
+                    axis_fault(axis)
+                return float(self._real.get_axis(axis))
+
+            def __getattr__(self, name: str) -> object:
+                return getattr(self._real, name)
+
+        monkeypatch.setattr(pygame.joystick, "Joystick", FlakyJoystick)
+        device.unplug()  # plugged back in: opened through the flaky wrapper
+        eventually(lambda: pad.name is None, "the pad to be gone")
+        device = VirtualPad(sdl)
+        eventually(lambda: axis_fault.calls == 1, "the failing axis read")
+        device.axis(4, -1.0)  # forward: read once the pad is taken back
+        eventually(lambda: op.snapshot(clock.now()).demand.forward > 0.99, "forward after "
+                   "the axis fault")
+        assert faults[-1] == "gamepad: reading the axes failed: error: device gone"
+        assert len(faults) == 3 and pad.faults == 4  # the abort's twice, reported once
+        device.button(1, True)
+        eventually(lambda: len(aborts) == 2, "the abort after all three faults")
+    finally:
+        device.unplug()
+        pad.close()
+
+
+def test_the_default_mapping_is_found_from_any_directory(tmp_path: Path,
+                                                          monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    assert default_gamepad() == MAPPING  # the shipped one, beside the package
+    own = tmp_path / "configs" / "gamepad.yaml"
+    own.parent.mkdir()
+    own.write_text(MAPPING.read_text())
+    assert default_gamepad().resolve() == own  # a project's own mapping wins, as the team's
+
+
+def test_a_gcs_started_elsewhere_reads_the_pad(tmp_path: Path) -> None:
+    """From a directory without configs/, the shipped mapping is still read.
+
+    ``gcs run`` (no vehicles: its zenoh connects nowhere) rather than ``gcs demo``:
+    both start the reader the same way (``web.launch.serve``), and run needs no simulator.
+    """
+    _sdl()  # skips without pygame's SDL
+    config = ROOT / "configs" / "bebop_square.yaml"
+    team = tmp_path / "team.yaml"
+    team.write_text(config.read_text().replace("airframe: airframes/",
+                                               f"airframe: {config.parent / 'airframes'}/")
+                    + "\ngcs:\n  zenoh: {mode: peer, connect: []}\n")
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "gcs", "run", "--config", str(team), "--port",
+         str(free_tcp_port())], cwd=elsewhere, stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT, text=True,
+        env={**os.environ, "PYTHONUNBUFFERED": "1", "SDL_VIDEODRIVER": "dummy"})
+    lines: list[str] = []
+    try:
+        assert proc.stdout is not None
+        deadline = time.monotonic() + 60.0
+        while not any(re.match(r"gamepad: |GCS page: ", line) for line in lines):
+            assert time.monotonic() < deadline, "".join(lines)
+            line = proc.stdout.readline()
+            assert line, f"gcs run exited: {''.join(lines)}"
+            lines.append(line)
+    finally:
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.wait(30)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(10)
+    said = next(line for line in lines if line.startswith("gamepad: "))
+    assert said.startswith(f"gamepad: mapping {MAPPING};"), said

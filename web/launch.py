@@ -28,10 +28,24 @@ from gcs.phases import Action, PhaseError
 from gcs.simprocess import SimProcess, free_tcp_port
 from web.ui import WebUi
 
-__all__ = ["DEFAULT_GAMEPAD", "run_demo", "run_gcs", "serve"]
+__all__ = ["DEFAULT_GAMEPAD", "default_gamepad", "run_demo", "run_gcs", "serve"]
 
-DEFAULT_GAMEPAD = Path("configs/gamepad.yaml")
-"""Gamepad mapping used when none is named (if the file exists)."""
+DEFAULT_GAMEPAD = Path("configs") / "gamepad.yaml"
+"""Gamepad mapping used when none is named (if the file exists), see :func:`default_gamepad`."""
+
+
+def default_gamepad() -> Path:
+    """configs/gamepad.yaml here, else the one beside the installed package.
+
+    The same rule as the default team (``gcs.cli``): a project directory's own
+    mapping wins, and ``gcs demo`` started from anywhere else still finds the
+    shipped one (relative to the current directory alone, the pad was silently
+    off there).
+    """
+    if DEFAULT_GAMEPAD.is_file():
+        return DEFAULT_GAMEPAD
+    beside = Path(__file__).resolve().parent.parent / DEFAULT_GAMEPAD
+    return beside if beside.is_file() else DEFAULT_GAMEPAD
 
 
 def _say(text: str) -> None:
@@ -44,7 +58,7 @@ def _start_gamepad(app: GcsApp, mapping: Path | None,
 
     ``may_steer`` says when the pad may steer: while no browser holds control.
     """
-    path = mapping if mapping is not None else DEFAULT_GAMEPAD
+    path = mapping if mapping is not None else default_gamepad()
     if mapping is None and not path.is_file():
         _say(f"gamepad: off ({path} not found)")
         return None
@@ -59,7 +73,8 @@ def _start_gamepad(app: GcsApp, mapping: Path | None,
         return run
 
     pad = Gamepad(config, app.operator, app.clock, on_abort=request(Action.ABORT),
-                  on_resume=request(Action.RESUME), may_steer=may_steer)
+                  on_resume=request(Action.RESUME), may_steer=may_steer,
+                  on_fault=lambda text: app.runtime.note("warning", text))
     try:
         pad.start()
     except RuntimeError as exc:
