@@ -1,0 +1,59 @@
+"""``gcs --help`` and ``python -m gcs --help`` list the seven commands the README names."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from gcs.cli import main
+from tests.conftest import run_gcs
+
+COMMANDS = {"analyze", "sim", "run", "demo", "fly", "replay", "report"}
+
+
+def listed(help_text: str) -> set[str]:
+    """The commands argparse lists under ``COMMAND``: the first word of each line
+    indented by exactly four spaces (a wrapped description is indented further)."""
+    lines = help_text.splitlines()
+    names = set()
+    for line in lines[lines.index("  COMMAND") + 1:]:
+        if not line.startswith("    "):
+            break
+        if line[4] != " ":
+            names.add(line.split()[0])
+    return names
+
+
+def gcs_script(*args: str) -> subprocess.CompletedProcess[str]:
+    """The ``gcs`` console script that pip installed beside this interpreter."""
+    script = Path(sys.executable).with_name("gcs")
+    assert script.is_file(), f"{script}: not installed (pip install -e .)"
+    return subprocess.run([str(script), *args], capture_output=True, text=True, timeout=60,
+                          check=False)
+
+
+@pytest.mark.parametrize("run", [gcs_script, run_gcs], ids=["gcs", "python -m gcs"])
+def test_help_lists_every_command(
+        run: Callable[..., subprocess.CompletedProcess[str]]) -> None:
+    out = run("--help")
+    assert out.returncode == 0, out.stderr
+    assert listed(out.stdout) == COMMANDS, out.stdout
+
+
+def test_the_readme_table_names_the_same_commands() -> None:
+    rows = [line for line in Path("README.md").read_text().splitlines()
+            if line.startswith("| `gcs ")]
+    assert {row.split()[2] for row in rows} == COMMANDS
+
+
+@pytest.mark.parametrize("command", sorted(COMMANDS))
+def test_each_command_has_its_own_help(command: str,
+                                       capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as info:
+        main([command, "--help"])
+    assert info.value.code == 0
+    assert capsys.readouterr().out.startswith(f"usage: gcs {command} ")
