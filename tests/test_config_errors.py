@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 import yaml
@@ -10,9 +12,12 @@ import yaml
 from gcs.analysis import analyze
 from gcs.config import ConfigError, load_team
 from gcs.gamepad import load_gamepad_config
+from tests.conftest import run_gcs
 from vehicles.airframe import BEBOP2, load_airframe
 
 SQUARE = Path("configs/bebop_square.yaml")
+
+Mutation = Callable[[dict[str, Any]], object]
 
 
 def write(tmp_path: Path, mutate) -> Path:  # type: ignore[no-untyped-def]
@@ -41,18 +46,44 @@ def test_the_shipped_configs_load() -> None:
     load_gamepad_config(Path("configs/gamepad.yaml"))
 
 
-def test_missing_field(tmp_path: Path) -> None:
-    refused(tmp_path, lambda d: d["guidance"].pop("c2"), "guidance.c2", "missing")
+def edge(k: int, value: list[float]) -> Mutation:
+    """Replace the square's edge k."""
+    return lambda d: d["edges"].__setitem__(k, value)
 
 
-def test_wrong_type(tmp_path: Path) -> None:
-    refused(tmp_path, lambda d: d["guidance"].update(c1="fast"), "guidance.c1",
-            "expected a number, got a string")
+#: One config mistake of each kind: the change to the square, the field named, the fault.
+MISTAKES: dict[str, tuple[Mutation, str, str]] = {
+    "missing field": (lambda d: d["guidance"].pop("c2"), "guidance.c2", "missing"),
+    "wrong type": (lambda d: d["guidance"].update(c1="fast"), "guidance.c1",
+                   "expected a number, got a string"),
+    "negative mass": (lambda d: d["payload"].update(mass=-0.4), "payload.mass",
+                      "must be greater than 0, got -0.4"),
+    "distance off the positions": (edge(1, [2, 4, 1.2]), "edges[1].distance",
+                                   "does not fit the positions"),
+    "unknown vehicle": (edge(3, [1, 7]), "edges[3].head", "unknown vehicle id 7"),
+    "not rigid": (lambda d: d.update(edges=[[1, 2], [2, 3], [3, 4], [4, 1]]), "edges",
+                  "not rigid"),  # the square's sides without its diagonals: it shears
+}
 
 
-def test_negative_mass(tmp_path: Path) -> None:
-    refused(tmp_path, lambda d: d["payload"].update(mass=-0.4), "payload.mass",
-            "must be greater than 0, got -0.4")
+@pytest.mark.parametrize("mistake", MISTAKES)
+def test_a_config_mistake_is_refused(tmp_path: Path, mistake: str) -> None:
+    refused(tmp_path, *MISTAKES[mistake])
+
+
+@pytest.mark.parametrize("mistake", MISTAKES)
+def test_gcs_analyze_refuses_a_config_mistake_in_one_line_with_status_2(
+        tmp_path: Path, mistake: str) -> None:
+    """The command line, not only load_team: one stderr line naming file and field, exit 2."""
+    mutate, field, words = MISTAKES[mistake]
+    path = write(tmp_path, mutate)
+    out = run_gcs("analyze", str(path))
+    assert out.returncode == 2, out.stdout + out.stderr
+    assert out.stdout == ""
+    [line] = out.stderr.splitlines()
+    assert out.stderr == line + "\n"
+    assert line.startswith(f"gcs analyze: error: {path}: {field}"), line
+    assert words in line, line
 
 
 def test_negative_airframe_mass_inline(tmp_path: Path) -> None:
@@ -115,24 +146,6 @@ def test_every_team_file_states_its_gains_and_physics() -> None:
 def test_unknown_field(tmp_path: Path) -> None:
     refused(tmp_path, lambda d: d["limits"].update(bank_degree=20), "limits.bank_degree",
             "unknown field")
-
-
-def test_distance_does_not_fit_positions(tmp_path: Path) -> None:
-    def bad(d: dict) -> None:
-        d["edges"][1] = [2, 4, 1.2]
-    refused(tmp_path, bad, "edges[1].distance", "does not fit the positions")
-
-
-def test_edge_names_unknown_vehicle(tmp_path: Path) -> None:
-    def bad(d: dict) -> None:
-        d["edges"][3] = [1, 7]
-    refused(tmp_path, bad, "edges[3].head", "unknown vehicle id 7")
-
-
-def test_graph_not_rigid(tmp_path: Path) -> None:
-    def ring(d: dict) -> None:
-        d["edges"] = [[1, 2], [2, 3], [3, 4], [4, 1]]
-    refused(tmp_path, ring, "edges", "not rigid")
 
 
 def test_collinear_shape_is_degenerate_not_short_of_edges(tmp_path: Path) -> None:
