@@ -1,24 +1,19 @@
 """The scene and the page's server side with a real viser server (no browser).
 
-A plain websocket client stands in for a viewer, so what the server sends
-is really serialised and received.
+A plain websocket client (``web.wireviewer.WireViewer``) stands in for a
+viewer, so what the server sends is really serialised, received and decoded.
 """
 
 from __future__ import annotations
 
-import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import cast
 
-import msgspec
 import numpy as np
 import pytest
 import viser
-from viser import _messages as viser_messages
-from websockets.exceptions import ConnectionClosed
-from websockets.sync.client import connect
 
 from gcs.analysis import analyze
 from gcs.app import GcsApp
@@ -26,6 +21,8 @@ from gcs.config import load_team
 from gcs.fleet import FleetState
 from gcs.link.zenoh_session import ZenohSettings
 from gcs.simprocess import SimProcess, free_tcp_port
+from gcs.simtruth import SimTruth
+from web import palette
 from web.actions import OperatorActions
 from web.control import ControlLock
 from web.frame import SceneFrame, TeamView, build_frame
@@ -34,52 +31,11 @@ from web.quadmesh import quad_mesh
 from web.scene import SceneView
 from web.trails import Trails
 from web.ui import WebUi
+from web.wireviewer import WireViewer
 
 ROOT = Path(__file__).resolve().parents[1]
 TEAM = load_team(ROOT / "configs" / "bebop_square.yaml")
 VIEW = TeamView.from_team(TEAM, analyze(TEAM))
-
-
-class Viewer:
-    """A websocket client that counts the bytes the page sends it."""
-
-    def __init__(self, port: int) -> None:
-        self.received = 0
-        self._stop = threading.Event()
-        self._ws = connect(f"ws://127.0.0.1:{port}",
-                           subprotocols=[f"viser-v{viser.__version__}"], max_size=None)
-        self._thread = threading.Thread(target=self._read, daemon=True)
-        self._thread.start()
-
-    def _read(self) -> None:
-        while not self._stop.is_set():
-            try:
-                self.received += len(self._ws.recv(timeout=0.1))
-            except TimeoutError:
-                continue
-            except ConnectionClosed:
-                return
-
-    def report_camera(self, position: tuple[float, float, float],
-                      look_at: tuple[float, float, float]) -> None:
-        """Report a camera as a browser does (viser counts a viewer once it has one)."""
-        message = viser_messages.ViewerCameraMessage(
-            wxyz=(1.0, 0.0, 0.0, 0.0), position=position, fov=1.0, near=0.01, far=1000.0,
-            image_height=600, image_width=800, look_at=look_at, up_direction=(0.0, 0.0, -1.0))
-        self._ws.send(msgspec.msgpack.encode(message.as_serializable_dict()))
-
-    def settled(self, quiet: float = 0.4) -> int:
-        """Bytes received once nothing more arrived for ``quiet`` seconds."""
-        last = -1
-        while last != self.received:
-            last = self.received
-            time.sleep(quiet)
-        return last
-
-    def close(self) -> None:
-        self._stop.set()
-        self._ws.close()
-        self._thread.join(timeout=2.0)
 
 
 @pytest.fixture
@@ -123,9 +79,39 @@ def test_the_scene_holds_what_the_frame_says(server: viser.ViserServer) -> None:
     assert not server.scene.get_handle_by_name("/team/ropes").visible
 
 
+def test_a_viewer_receives_the_team_where_it_is_and_right_way_up(
+        server: viser.ViserServer) -> None:
+    """Decoded from the wire: NED shown with up = -z, the vehicles and payload placed."""
+    scene = SceneView(server.scene, VIEW, quad_mesh(0.08, 0.11), geofence_xy=4.0)
+    viewer = WireViewer(server.get_port())
+    try:
+        truth = SimTruth(t=1.0, ids=VIEW.ids, vehicle_p_ned=((0.0, 0.0, -1.5),) * 4,
+                         payload_p_ned=(0.2, -0.1, -0.4), payload_v_ned=(0.0, 0.0, 0.0),
+                         rope_tension=(1.0,) * 4)
+        frame = build_frame(VIEW, fleet(1.0, known=3), scale=1.0, truth=truth, trails=Trails(4))
+        with server.atomic():
+            scene.draw(frame)
+        server.flush()
+        viewer.settled()
+        root = viser.transforms.SO3(np.array(viewer.wait_for("")["wxyz"])).as_matrix()
+        np.testing.assert_allclose(root @ [0.0, 0.0, -1.0], [0.0, 1.0, 0.0], atol=1e-6)
+        vehicles = viewer.wait_for("/team/vehicles")
+        assert vehicles["visible"]
+        np.testing.assert_allclose(vehicles["batched_positions"].reshape(-1, 3)[:3],
+                                   frame.p_ned[:3], atol=1e-5)
+        np.testing.assert_allclose(vehicles["batched_scales"], [1, 1, 1, 0])
+        np.testing.assert_array_equal(vehicles["batched_colors"].reshape(-1, 3),
+                                      frame.colors)
+        payload = viewer.wait_for("/team/payload")
+        assert payload["visible"] and tuple(payload["color"]) == tuple(palette.PAYLOAD)
+        np.testing.assert_allclose(payload["position"], truth.payload_p_ned, atol=1e-6)
+    finally:
+        viewer.close()
+
+
 def test_only_what_changed_is_sent(server: viser.ViserServer) -> None:
     scene = SceneView(server.scene, VIEW, quad_mesh(0.08, 0.11), geofence_xy=4.0)
-    viewer = Viewer(server.get_port())
+    viewer = WireViewer(server.get_port())
     try:
         trails = Trails(4)
         first = build_frame(VIEW, fleet(1.0), scale=1.0, truth=None, trails=trails)
@@ -148,7 +134,7 @@ def test_the_page_draws_at_its_rate_beside_a_running_loop() -> None:
     settings = ZenohSettings(mode="peer", connect=())  # no vehicles: the team is unknown
     with GcsApp(TEAM, zenoh_settings=settings) as app:
         ui = WebUi(app, port=free_tcp_port(), rate_hz=25.0)
-        viewer = Viewer(ui.server.get_port())
+        viewer = WireViewer(ui.server.get_port())
         try:
             app.start()
             ui.start()
@@ -167,7 +153,7 @@ def test_the_page_draws_at_its_rate_beside_a_running_loop() -> None:
             ui.close()
 
 
-def connected_client(server: viser.ViserServer, viewer: Viewer) -> viser.ClientHandle:
+def connected_client(server: viser.ViserServer, viewer: WireViewer) -> viser.ClientHandle:
     """The server's handle of ``viewer``, once it reported its camera."""
     viewer.report_camera((-3.0, -1.0, -2.0), (0.0, 0.0, 0.0))
     deadline = time.monotonic() + 10.0
@@ -180,7 +166,7 @@ def connected_client(server: viser.ViserServer, viewer: Viewer) -> viser.ClientH
 
 def test_following_the_team_keeps_the_viewers_angle_and_zoom(
         server: viser.ViserServer) -> None:
-    viewer = Viewer(server.get_port())
+    viewer = WireViewer(server.get_port())
     try:
         client = connected_client(server, viewer)
         panel = ControlPanel(client, cast(OperatorActions, object()), ControlLock(),
@@ -241,7 +227,7 @@ def test_a_slow_page_never_delays_the_loop(monkeypatch: pytest.MonkeyPatch, how:
         ticks: list[float] = []
         app.add_listener(lambda _snap, _truth: ticks.append(time.monotonic()))
         ui = WebUi(app, port=free_tcp_port())
-        viewer = Viewer(ui.server.get_port())
+        viewer = WireViewer(ui.server.get_port())
         try:
             app.start()
             ui.start()
