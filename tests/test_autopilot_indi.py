@@ -362,9 +362,10 @@ def ask_too_much(world: World, autopilot: Autopilot, accel_xy: tuple[float, floa
                  z_ned: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Command every vehicle ``accel_xy`` for 0.5 s, more than the bank limit allows.
 
-    Returns each vehicle's peak |roll| and |pitch| (N, 2), rad, and mean rope tension (N,), N.
+    Returns each vehicle's peak |roll| and |pitch| (N, 2), rad, its peak tilt of the
+    thrust axis from the vertical (N,), rad, and mean rope tension (N,), N.
     """
-    roll_pitch, tension = [], []
+    roll_pitch, tilt, tension = [], [], []
     for _ in range(256):  # 0.5 s at 512 Hz
         for i in range(world.n_vehicles):
             autopilot.set_accel_xy_pos_z_setpoint(i, accel_xy, z_ned[i])
@@ -372,8 +373,11 @@ def ask_too_much(world: World, autopilot: Autopilot, accel_xy: tuple[float, floa
                 assert autopilot.start_offboard(i).accepted
         world.run(autopilot, 1.0 / 512.0)
         roll_pitch.append(euler_from_quaternions(world.state.q_wxyz)[:, :2])
+        q = world.state.q_wxyz
+        tilt.append(np.arccos(1.0 - 2.0 * (q[:, 1] ** 2 + q[:, 2] ** 2)))  # R_zz
         tension.append(world.rope_tension)
-    return np.abs(np.array(roll_pitch)).max(axis=0), np.mean(tension, axis=0)
+    return (np.abs(np.array(roll_pitch)).max(axis=0), np.max(tilt, axis=0),
+            np.mean(tension, axis=0))
 
 
 def test_bank_limit_holds_when_more_acceleration_is_asked() -> None:
@@ -386,13 +390,19 @@ def test_bank_limit_holds_when_more_acceleration_is_asked() -> None:
     take_off(world, autopilot, 1.5)
     bank = math.radians(autopilot.config.bank_max_deg)
     for accel_xy in ((5.0, 0.0), (0.0, -5.0), (4.0, 4.0)):
-        peak, tension = ask_too_much(world, autopilot, accel_xy, np.array([-1.5]))
+        peak, tilt, tension = ask_too_much(world, autopilot, accel_xy, np.array([-1.5]))
         # The commands are clipped at the limit; the attitude loop (damping 0.8)
         # overshoots it by at most 0.25 degrees (eight seeds, worst on the diagonal).
         assert np.all(peak[0] < bank + math.radians(0.3)), np.degrees(peak)
         for axis in range(2):
             if accel_xy[1 - axis] != 0.0:  # roll serves east, pitch serves north
                 assert peak[0, axis] > bank - math.radians(0.1), np.degrees(peak)
+        # Roll and pitch are limited each on its own (as in the paper and Paparazzi):
+        # on the diagonal the thrust tilts by acos(cos^2 20 deg) = 27.9 degrees
+        # (measured 28.04), on one axis by 20.
+        tilt_max = math.acos(math.cos(bank) ** sum(a != 0.0 for a in accel_xy))
+        assert tilt_max - math.radians(0.2) < tilt[0] < tilt_max + math.radians(0.3), (
+            math.degrees(tilt[0]))
         assert np.all(tension == 0.0)
         assert autopilot.hold(0).accepted
         world.run(autopilot, 3.0)
@@ -407,12 +417,16 @@ def test_bank_limit_holds_with_the_payload_hanging(accel_xy: tuple[float, float]
                                   autopilot_config=load_autopilot_config(DEFAULT_AUTOPILOT_CONFIG))
     take_off(world, autopilot, 1.5)
     bank = math.radians(autopilot.config.bank_max_deg)
-    peak, tension = ask_too_much(world, autopilot, accel_xy, autopilot.state.p_hold[:, 2].copy())
+    peak, tilt, tension = ask_too_much(world, autopilot, accel_xy,
+                                       autopilot.state.p_hold[:, 2].copy())
     # Meanwhile the ropes carry the payload and pull on every vehicle (the trailing
     # ones most, the leading ones' ropes go slack now and then).
     assert tension.sum() > 0.4 * world.config.gravity and np.all(tension > 0.1), tension
     # Measured at most 0.36 degrees over the limit (six seeds, worst on the diagonal).
     assert np.all(peak < bank + math.radians(0.4)), np.degrees(peak)
+    # So is the thrust's tilt: at most acos(cos^2 20 deg) = 27.9 degrees with both at
+    # the limit (measured 28.06 on the diagonal, 21.7 on one axis).
+    assert np.all(tilt < math.acos(math.cos(bank) ** 2) + math.radians(0.4)), np.degrees(tilt)
     # Every vehicle reaches the limit on an axis the command needs.
     serving = [axis for axis in range(2) if accel_xy[1 - axis] != 0.0]
     assert np.all(peak[:, serving].max(axis=1) > bank - math.radians(0.1)), np.degrees(peak)
