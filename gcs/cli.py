@@ -9,8 +9,13 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 from gcs.typed_config import ConfigError
+
+if TYPE_CHECKING:
+    from gcs.flightlog import FlightLog
 
 __all__ = ["main"]
 
@@ -64,23 +69,21 @@ def _cmd_fly(args: argparse.Namespace) -> int:
     return 0 if result.error is None else 1
 
 
-def _cmd_report(args: argparse.Namespace) -> int:
-    import json
-    from pathlib import Path
+def _load_log(path: Path, command: str, *, quiet: bool) -> FlightLog | None:
+    """The flight log at ``path``, with a progress bar per loading stage on stderr.
 
+    Stages: ``index`` (bytes), ``decode`` (the GCS's guidance internals) and
+    ``tracks`` (the vehicles' telemetry), in messages. None, after one line on
+    stderr, for a file that is no log or cannot be read.
+    """
     from tqdm import tqdm
 
     from gcs.flightlog import FlightLog
     from gcs.logreader import LogError
-    from gcs.report import write_report
 
-    path = Path(args.file)
-    out = Path(args.out) if args.out else path.with_suffix("").with_name(path.stem + "_report")
     bars: dict[str, tqdm] = {}
 
     def progress(stage: str, done: int, total: int) -> None:
-        if args.quiet:
-            return
         bar = bars.get(stage)
         if bar is None:
             unit = "B" if stage == "index" else "msg"
@@ -89,16 +92,29 @@ def _cmd_report(args: argparse.Namespace) -> int:
         bar.update(done - bar.n)
 
     try:
-        log = FlightLog.load(path, progress=progress)
+        return FlightLog.load(path, progress=None if quiet else progress)
     except LogError as exc:
-        print(f"gcs report: error: {exc}", file=sys.stderr)
-        return 2
+        print(f"gcs {command}: error: {exc}", file=sys.stderr)
     except OSError as exc:
-        print(f"gcs report: error: {_os_error(exc, path)}", file=sys.stderr)
-        return 2
+        print(f"gcs {command}: error: {_os_error(exc, path)}", file=sys.stderr)
     finally:
         for bar in bars.values():
             bar.close()
+    return None
+
+
+def _cmd_report(args: argparse.Namespace) -> int:
+    import json
+
+    from tqdm import tqdm
+
+    from gcs.report import write_report
+
+    path = Path(args.file)
+    out = Path(args.out) if args.out else path.with_suffix("").with_name(path.stem + "_report")
+    log = _load_log(path, "report", quiet=args.quiet)
+    if log is None:
+        return 2
     figures = None if args.quiet else tqdm(total=4, desc="figures", unit="fig", leave=False,
                                            file=sys.stderr)
     try:
@@ -117,11 +133,9 @@ def _cmd_report(args: argparse.Namespace) -> int:
               f"summary.json, summary.md")
         for line in log.missing:
             print(f"missing: {line}")
-        ix = log.index
-        if ix.truncated or ix.skipped_bytes or ix.unknown_frames or ix.rejected_times:
-            print(f"note: truncated={ix.truncated}, corrupt bytes skipped={ix.skipped_bytes}, "
-                  f"unknown frames skipped={ix.unknown_frames}, "
-                  f"records with a damaged timestamp rejected={ix.rejected_times}")
+        damage = log.index.damage()
+        if damage is not None:
+            print(f"note: {damage}")
     return 0
 
 
@@ -163,16 +177,16 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 
 def _cmd_replay(args: argparse.Namespace) -> int:
-    from gcs.logreader import LogError
     from web.replay_page import run_replay
 
-    try:
-        return run_replay(args.file, host=args.host, port=args.port)
-    except LogError as exc:
-        print(f"gcs replay: error: {exc}", file=sys.stderr)
+    path = Path(args.file)
+    log = _load_log(path, "replay", quiet=args.quiet)
+    if log is None:
         return 2
+    try:
+        return run_replay(log, name=path.name, host=args.host, port=args.port)
     except OSError as exc:
-        print(f"gcs replay: error: {_os_error(exc, args.file)}", file=sys.stderr)
+        print(f"gcs replay: error: {_os_error(exc, path)}", file=sys.stderr)
         return 2
 
 
@@ -269,6 +283,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--port", type=int, default=8080, help="port of the page (default 8080)")
     p.add_argument("--host", default="127.0.0.1",
                    help="interface to serve the page on (default 127.0.0.1)")
+    p.add_argument("--quiet", action="store_true", help="no progress bars while loading")
     p.set_defaults(func=_cmd_replay)
     return parser
 

@@ -9,7 +9,9 @@ vehicle tracks are decoded into numpy columns (:mod:`gcs.logcolumns`).
 Which system is the GCS is read from what only the recorder writes (its team
 header, else its ``phase`` values from a system that reports no position);
 systems whose HEARTBEAT says ``MAV_TYPE_GCS`` are ground stations too. Neither
-becomes a vehicle, and neither counts in the link losses.
+becomes a vehicle, and neither counts in the link losses. Every other system
+with an autopilot component is a vehicle, whether or not its positions were
+logged (see :func:`_read_tracks` for where each one is placed).
 """
 
 from __future__ import annotations
@@ -24,19 +26,29 @@ import numpy as np
 from gcs.link.dialect import mavlink
 from gcs.link.modes import SAFETY_ARMED, heartbeat_mode_text
 from gcs.logcolumns import decode_columns
-from gcs.logreader import TlogIndex
+from gcs.logreader import TlogIndex, msg_id
 from gcs.metrics import FlightMetrics
 from gcs.phases import Phase
 from gcs.recorder import ARRAY_SPAN, ARRAYS, chunked, parse_team_header
 
-__all__ = ["EARTH_RADIUS_M", "FlightLog", "Track"]
+__all__ = ["EARTH_RADIUS_M", "ORIGIN_TOLERANCE_M", "FlightLog", "Track", "tilt_angle"]
 
 _ARRAY_OF = {base + k: name for name, base in ARRAYS.items() for k in range(ARRAY_SPAN)}
 _CHUNK_LEN = len(chunked(np.zeros(1000))[0])  # values per DEBUG_FLOAT_ARRAY message
 _POSITIONS = ("LOCAL_POSITION_NED", "GLOBAL_POSITION_INT")
+_TRACK_MESSAGES = (*_POSITIONS, "ATTITUDE", "HEARTBEAT", "SYS_STATUS")
+_MATCH_S = 0.5  # a local and a global position this close in time describe one moment
 
 EARTH_RADIUS_M = 6_378_137.0
 """Equatorial radius (WGS-84) of the flat-earth conversion of GLOBAL_POSITION_INT, m."""
+
+ORIGIN_TOLERANCE_M = 1.0
+"""Vehicles' LOCAL_POSITION_NED origins further apart than this are different frames, m."""
+
+
+def tilt_angle(rpy: np.ndarray) -> np.ndarray:
+    """Angle between body and world vertical from roll and pitch (``rpy[..., :2]``), rad."""
+    return np.arccos(np.clip(np.cos(rpy[..., 0]) * np.cos(rpy[..., 1]), -1.0, 1.0))
 
 
 @dataclass(frozen=True, eq=False)
@@ -80,6 +92,7 @@ class FlightLog:
     texts: list[tuple[float, int, int, str]]  # (t, sysid, severity, text)
     missing: list[str] = field(default_factory=list)
     origin: tuple[float, float, float] | None = None  # lat, lon (deg), alt (m) of NED zero
+    origin_spread: float = 0.0  # m, how far apart the vehicles' local origins are
 
     @classmethod
     def load(cls, path: str | Path,
@@ -93,11 +106,11 @@ class FlightLog:
         team = None
         if gcs_sysid is not None:
             team = _read_internals(index, gcs_sysid, ticks, progress)
-        tracks, origin = _read_tracks(index, ground)
+        tracks, origin, spread = _read_tracks(index, ground, progress)
         texts = _read_texts(index)
         log = cls(index=index, gcs_sysid=gcs_sysid, ground=frozenset(ground), team=team,
                   tick_t=np.zeros(0), phase=np.zeros(0, dtype=int), values={}, arrays={},
-                  tracks=tracks, texts=texts, origin=origin)
+                  tracks=tracks, texts=texts, origin=origin, origin_spread=spread)
         log._assemble(ticks)
         return log
 
@@ -127,18 +140,25 @@ class FlightLog:
                 self.values[name] = np.array([np.nan if r is None else r for r in rows],
                                              dtype=float)
         if self.gcs_sysid is None:
-            self.missing.append("guidance internals (no GCS messages: a plain autopilot log)")
+            self.missing.append("guidance internals (no GCS messages: a plain autopilot log), "
+                                "so no phases, per-phase distance errors, payload swing or "
+                                "commanded accelerations")
         if self.team is None:
             self.missing.append("team header (edges and desired distances)")
         if "payload" not in self.arrays:
             self.missing.append("payload and rope truth (only recorded in simulation)")
-        if not self.tracks:
-            self.missing.append("vehicle positions (no LOCAL_POSITION_NED or "
+        unplaced = [s for s, tr in sorted(self.tracks.items()) if not len(tr.t)]
+        if not self.tracks or unplaced:
+            whose = f" from vehicle {', '.join(map(str, unplaced))}" if unplaced else ""
+            self.missing.append(f"vehicle positions{whose} (no LOCAL_POSITION_NED or "
                                 "GLOBAL_POSITION_INT)")
-        elif self.origin is not None:
+        if self.origin is not None:
             lat, lon, alt = self.origin
-            self.missing.append(f"local positions (drawn from GLOBAL_POSITION_INT about "
-                                f"{lat:.6f}, {lon:.6f}, {alt:.1f} m, flat earth)")
+            why = ("a shared local frame (the vehicles' LOCAL_POSITION_NED origins differ by "
+                   f"up to {self.origin_spread:.1f} m)"
+                   if self.origin_spread > ORIGIN_TOLERANCE_M else "local positions")
+            self.missing.append(f"{why}: drawn from GLOBAL_POSITION_INT about "
+                                f"{lat:.6f}, {lon:.6f}, {alt:.1f} m, flat earth")
 
     @property
     def n_vehicles(self) -> int:
@@ -168,6 +188,32 @@ class FlightLog:
                 vehicles_true=true_p[k] if whole else None, payload=payload if whole else None,
                 rope_tension=rope[k, :, 0] if whole else None)
         return m
+
+    def telemetry_metrics(self) -> dict[str, object]:
+        """What the vehicles' telemetry alone gives, for a log without guidance ticks.
+
+        A plain autopilot log has no ticks, so :meth:`metrics` has nothing to
+        count; its telemetry still tells how long the vehicles were logged and
+        how far they banked while armed (each ATTITUDE against the latest
+        HEARTBEAT before it). The keys are those of :meth:`metrics`; what needs
+        the guidance internals is None.
+        """
+        spans = [a for tr in self.tracks.values()
+                 for a in (tr.t, tr.att_t, tr.hb_t, tr.battery_t) if len(a)]
+        m = FlightMetrics()
+        if spans:
+            m.start = min(float(a[0]) for a in spans)
+            m.end = max(float(a[-1]) for a in spans)
+        banks = []
+        for tr in self.tracks.values():
+            if len(tr.hb_t):
+                hb = np.searchsorted(tr.hb_t, tr.att_t, side="right") - 1
+                banks.append(tilt_angle(tr.rpy[(hb >= 0) & tr.armed[np.maximum(hb, 0)]]))
+        bank = np.concatenate(banks) if banks else np.zeros(0)
+        out = m.to_json()
+        out.update(worst_distance_error_m=None, worst_accel_cmd_m_s2=None,
+                   worst_bank_rad=round(float(bank.max()), 4) if len(bank) else None)
+        return out
 
     def per_vehicle(self, name: str, columns: int) -> np.ndarray:
         """Array ``name`` as (ticks, vehicles, columns), NaN where it was not recorded."""
@@ -312,40 +358,95 @@ def _trim(name: str, flat: np.ndarray, team: dict | None) -> np.ndarray:
     return out
 
 
-def _read_tracks(index: TlogIndex, ground: set[int]
-                 ) -> tuple[dict[int, Track], tuple[float, float, float] | None]:
-    """Every vehicle's track, and the GLOBAL_POSITION_INT origin if any track needed one.
+def _read_tracks(index: TlogIndex, ground: set[int],
+                 progress: Callable[[str, int, int], None] | None = None
+                 ) -> tuple[dict[int, Track], tuple[float, float, float] | None, float]:
+    """Every vehicle's track; the GLOBAL_POSITION_INT origin if a track was placed from it;
+    how far apart the vehicles' LOCAL_POSITION_NED origins are (0 when not comparable).
 
-    A vehicle is a system, not a ground station, whose autopilot component
-    (the one that sends its positions) reported at least one position.
+    A vehicle is a system, not a ground station, with an autopilot component:
+    the one that sends its positions, else the one whose HEARTBEAT names an
+    autopilot. A vehicle whose positions were not logged is kept (its mode,
+    attitude and battery are still worth seeing), its position unknown.
+
+    Where a vehicle is placed (one rule, so the team's distances mean something):
+    from LOCAL_POSITION_NED when the vehicles' local frames share an origin; from
+    GLOBAL_POSITION_INT, flat earth about the first of those fixes, when it sends
+    no local positions, and for every vehicle that sends fixes when the local
+    origins differ by more than :data:`ORIGIN_TOLERANCE_M` (each autopilot sets
+    its own origin where its estimator started, unless the GCS set one for all).
+    A vehicle's origin is read as its median of global minus local position.
     """
+    vehicles = {s: c for s in index.systems() if s not in ground
+                and (c := _autopilot_component(index, s)) is not None}
+    local: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+    fixes: dict[int, tuple[np.ndarray, ...]] = {}
+    for sysid, comp in vehicles.items():
+        if len((track := _local_positions(index, sysid, comp))[0]):
+            local[sysid] = track
+        if len((fix := _global_positions(index, sysid, comp))[0]):
+            fixes[sysid] = fix
+    reference = _first_fix(fixes[min(fixes)]) if fixes else None
+    placed = {s: (f[0], _flat_earth(f[1], f[2], f[3], reference))  # type: ignore[arg-type]
+              for s, f in fixes.items()}
+    spread = _origin_spread(local, placed)
+    from_global = set(placed) if spread > ORIGIN_TOLERANCE_M else set(placed) - set(local)
+    origin = reference if from_global else None
+    wanted = np.isin(index.msgid, [msg_id(name) for name in _TRACK_MESSAGES])
+    counts = np.bincount(index.sysid[wanted], minlength=256)
+    total, done = int(sum(counts[s] for s in vehicles)), 0
     tracks: dict[int, Track] = {}
-    origin = None
-    for sysid in index.systems():
-        if sysid in ground:
-            continue
-        comp, name = _position_source(index, sysid)
-        if comp is None:
-            continue
-        if name == "LOCAL_POSITION_NED":
-            t, p, v = _local_positions(index, sysid, comp)
+    for sysid, comp in vehicles.items():
+        if sysid in from_global:
+            (t, p), v = placed[sysid], fixes[sysid][4]
         else:
-            t, lat, lon, alt, v = _global_positions(index, sysid, comp)
-            if origin is None and len(t):
-                origin = (float(lat[0]), float(lon[0]), float(alt[0]))
-            p = _flat_earth(lat, lon, alt, origin) if len(t) else np.zeros((0, 3))
-        if len(t):
-            tracks[sysid] = _track(index, sysid, comp, t, p, v)
-    return tracks, origin
+            t, p, v = local.get(sysid, (np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3))))
+        tracks[sysid] = _track(index, sysid, comp, t, p, v)
+        done += int(counts[sysid])
+        if progress is not None:
+            progress("tracks", done, total)
+    return tracks, origin, spread
 
 
-def _position_source(index: TlogIndex, sysid: int) -> tuple[int | None, str]:
-    """(component, message) that carries ``sysid``'s positions, local NED preferred."""
-    for name in _POSITIONS:
-        recs = index.select(name, sysid=sysid)
-        if len(recs):
-            return int(np.bincount(index.compid[recs]).argmax()), name
-    return None, ""
+def _autopilot_component(index: TlogIndex, sysid: int) -> int | None:
+    """The component of ``sysid`` that sends its positions, else the one whose HEARTBEAT
+    names an autopilot (a gimbal's or a companion computer's names none); None if neither."""
+    recs = np.concatenate([index.select(name, sysid=sysid) for name in _POSITIONS])
+    if not len(recs):
+        recs = index.select("HEARTBEAT", sysid=sysid)
+        kind = decode_columns(index.path, index.offset, recs, "HEARTBEAT")["autopilot"]
+        recs = recs[kind != mavlink.MAV_AUTOPILOT_INVALID]
+    return int(np.bincount(index.compid[recs]).argmax()) if len(recs) else None
+
+
+def _first_fix(fix: tuple[np.ndarray, ...]) -> tuple[float, float, float]:
+    """Latitude, longitude (deg) and altitude (m) of the first of a vehicle's fixes."""
+    _, lat, lon, alt, _ = fix
+    return float(lat[0]), float(lon[0]), float(alt[0])
+
+
+def _origin_spread(local: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]],
+                   placed: dict[int, tuple[np.ndarray, np.ndarray]]) -> float:
+    """Largest distance between two vehicles' local origins, in the frame of ``placed``, m.
+
+    A vehicle's origin is the median of its global position (``placed``: times and
+    flat-earth NED) minus its local position at the same moment (the latest local
+    sample at most :data:`_MATCH_S` before the fix). 0 with fewer than two vehicles
+    that send both.
+    """
+    origins = []
+    for sysid, (tl, pl, _) in local.items():
+        if sysid not in placed:
+            continue
+        tg, pg = placed[sysid]
+        k = np.searchsorted(tl, tg, side="right") - 1
+        near = (k >= 0) & (tg - tl[np.maximum(k, 0)] <= _MATCH_S)
+        if near.any():
+            origins.append(np.median(pg[near] - pl[k[near]], axis=0))
+    if len(origins) < 2:
+        return 0.0
+    o = np.array(origins)
+    return float(np.linalg.norm(o[:, None] - o[None, :], axis=2).max())
 
 
 def _columns(index: TlogIndex, name: str, sysid: int, comp: int

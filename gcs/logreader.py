@@ -26,7 +26,7 @@ import numpy as np
 from gcs.link.dialect import MavMessage, mavlink
 from gcs.logscan import map_file, scan_buffer
 
-__all__ = ["LogError", "TlogIndex"]
+__all__ = ["LogError", "TlogIndex", "msg_id"]
 
 #: A record more than this away from its neighbours' times has a damaged stamp, s.
 TIME_JUMP_S = 2.0
@@ -83,9 +83,23 @@ class TlogIndex:
     def __len__(self) -> int:
         return len(self.t)
 
+    def damage(self) -> str | None:
+        """What could not be read, in one line (None for a log read whole).
+
+        One wording for every command that opens a log (``gcs report`` prints it,
+        ``gcs replay`` prints it and shows it on the page), so a damaged log is
+        described the same way wherever it is opened.
+        """
+        if not (self.truncated or self.skipped_bytes or self.unknown_frames
+                or self.rejected_times):
+            return None
+        return (f"truncated={self.truncated}, corrupt bytes skipped={self.skipped_bytes}, "
+                f"unknown frames skipped={self.unknown_frames}, "
+                f"records with a damaged timestamp rejected={self.rejected_times}")
+
     def select(self, name: str, *, sysid: int | None = None) -> np.ndarray:
         """Record numbers of every message called ``name`` (from ``sysid`` if given)."""
-        mask = self.msgid == _msg_id(name)
+        mask = self.msgid == msg_id(name)
         if sysid is not None:
             mask &= self.sysid == sysid
         return np.flatnonzero(mask)
@@ -126,7 +140,8 @@ class TlogIndex:
         return {(int(k) >> 8, int(k) & 0xFF): int(n) for k, n in zip(keys, lost, strict=True)}
 
 
-def _msg_id(name: str) -> int:
+def msg_id(name: str) -> int:
+    """The dialect's id of message ``name``; ValueError for a name it does not know."""
     value = getattr(mavlink, f"MAVLINK_MSG_ID_{name.upper()}", None)
     if not isinstance(value, int):
         raise ValueError(f"unknown MAVLink message {name!r}")

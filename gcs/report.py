@@ -2,6 +2,8 @@
 
 * ``formation.png``: inter-vehicle distances against their desired values (top)
   and x/y velocities of the vehicles (bottom), like the paper's experimental figure;
+  for a plain autopilot log (no team, no guidance ticks) the distances between
+  the vehicles' own positions, without desired values;
 * ``trajectories.png``: top view of the vehicles' (and the payload's) paths,
   like the paper's trajectory plot;
 * ``distance_errors.png``: the distance error of every edge, phases shaded;
@@ -13,7 +15,8 @@
   contain and how much of it could not be read.
 
 The summary's metrics come from :meth:`FlightLog.metrics`, the same code that
-``gcs fly`` runs live, so both agree for the same flight.
+``gcs fly`` runs live, so both agree for the same flight; a log without guidance
+ticks gets what its telemetry gives (:meth:`FlightLog.telemetry_metrics`).
 """
 
 from __future__ import annotations
@@ -31,10 +34,18 @@ import numpy as np
 from gcs.flightlog import FlightLog
 from gcs.phases import Phase
 
-__all__ = ["PLOT_BUCKETS", "envelope", "write_report"]
+__all__ = ["FIGURES", "PAIRS_DRAWN", "PLOT_BUCKETS", "envelope", "vehicle_distances",
+           "write_report"]
 
 PLOT_BUCKETS = 2000
 """Time buckets per plotted series: about two per pixel of a figure 10 inches wide."""
+
+FIGURES = ("formation.png", "trajectories.png", "distance_errors.png", "accelerations.png")
+"""Every figure a report can hold, in order; a log lacking what one needs goes without it."""
+
+PAIRS_DRAWN = 8
+"""Up to this many vehicles, a plain log's figure draws every pair's distance; beyond,
+only the closest pair's (28 lines are already hard to tell apart)."""
 
 
 def envelope(y: np.ndarray, buckets: int = PLOT_BUCKETS) -> np.ndarray:
@@ -79,9 +90,8 @@ def write_report(log: FlightLog, out: Path,
     """Write the figures and summaries of ``log`` into ``out``; returns the summary."""
     out.mkdir(parents=True, exist_ok=True)
     figures = []
-    for name, fn in (("formation.png", _formation), ("trajectories.png", _trajectories),
-                     ("distance_errors.png", _distance_errors),
-                     ("accelerations.png", _accelerations)):
+    draw = (_formation, _trajectories, _distance_errors, _accelerations)
+    for name, fn in zip(FIGURES, draw, strict=True):
         if progress is not None:
             progress(name)
         fig = fn(log)
@@ -132,8 +142,15 @@ def _formation(log: FlightLog) -> plt.Figure | None:
             _plot(top, t, value, "k--", lw=0.8)
         top.legend(ncol=6, fontsize=7, loc="upper right")
         _shade_phases(top, log, t0)
+    elif (pairs := vehicle_distances(log)) is not None:
+        t, distances = pairs
+        for (a, b), d in distances.items():
+            _plot(top, t - t0, d, lw=1.2, label=f"{a}-{b}" if b else f"closest ({a} vehicles)")
+        top.legend(ncol=6, fontsize=7, loc="upper right")
+        top.set_title("between the vehicles' positions (no desired values: no team header)",
+                      fontsize=9)
     else:
-        top.text(0.5, 0.5, "distances: no team header or guidance internals in this log",
+        top.text(0.5, 0.5, "distances: fewer than two vehicles with positions in this log",
                  ha="center", va="center", transform=top.transAxes)
     top.set_ylabel("distance [m]")
     for sysid, tr in sorted(log.tracks.items()):
@@ -145,6 +162,35 @@ def _formation(log: FlightLog) -> plt.Figure | None:
     fig.suptitle("Distances (desired dashed) and velocities")
     fig.tight_layout()
     return fig
+
+
+def vehicle_distances(log: FlightLog, samples: int = 8 * PLOT_BUCKETS
+                      ) -> tuple[np.ndarray, dict[tuple[int, int], np.ndarray]] | None:
+    """Distances between the vehicles over time, from their own positions (no team needed).
+
+    Sampled at the recorded position times (every k-th of them past ``samples``),
+    each vehicle at its latest position at or before (NaN before its first), as
+    the replay draws them. Every pair up to :data:`PAIRS_DRAWN` vehicles, keyed by
+    their ids; beyond, one series keyed (vehicles, 0): the closest pair's distance.
+    None with fewer than two vehicles that have positions.
+    """
+    tracks = {s: tr for s, tr in sorted(log.tracks.items()) if len(tr.t)}
+    if len(tracks) < 2:
+        return None
+    t = np.unique(np.concatenate([tr.t for tr in tracks.values()]))
+    t = t[:: max(1, -(-len(t) // samples))]
+    p = np.full((len(tracks), len(t), 3), np.nan)
+    for i, tr in enumerate(tracks.values()):
+        k = np.searchsorted(tr.t, t, side="right") - 1
+        p[i, k >= 0] = tr.p_ned[k[k >= 0]]
+    ids = list(tracks)
+    pairs = [(i, j) for i in range(len(ids)) for j in range(i + 1, len(ids))]
+    if len(ids) <= PAIRS_DRAWN:
+        return t, {(ids[i], ids[j]): np.linalg.norm(p[i] - p[j], axis=1) for i, j in pairs}
+    closest = np.full(len(t), np.inf)
+    for i, j in pairs:
+        closest = np.fmin(closest, np.linalg.norm(p[i] - p[j], axis=1))
+    return t, {(len(ids), 0): np.where(np.isfinite(closest), closest, np.nan)}
 
 
 def _trajectories(log: FlightLog) -> plt.Figure | None:
@@ -216,7 +262,7 @@ def _accelerations(log: FlightLog) -> plt.Figure | None:
 
 
 def _summary(log: FlightLog, figures: list[str]) -> dict[str, object]:
-    metrics = log.metrics().to_json() if len(log.tick_t) else {}
+    metrics = log.metrics().to_json() if len(log.tick_t) else log.telemetry_metrics()
     t0 = _t0(log)
     return {
         "log": str(log.index.path),
@@ -225,6 +271,7 @@ def _summary(log: FlightLog, figures: list[str]) -> dict[str, object]:
         "unknown_frames_skipped": log.index.unknown_frames,
         "bad_timestamps_rejected": log.index.rejected_times,
         "truncated": log.index.truncated,
+        "damage": log.index.damage(),
         "vehicles": sorted(log.tracks),
         "metrics": metrics,
         "link_losses": {f"{s}/{c}": n for (s, c), n in sorted(log.link_losses().items())},
@@ -244,17 +291,17 @@ def _markdown(s: dict[str, object]) -> str:
         for key in ("duration_s", "worst_distance_error_m", "payload_lift_m", "worst_swing_rad",
                     "worst_bank_rad", "worst_accel_cmd_m_s2", "rope_tension_min_N",
                     "rope_tension_max_N"):
-            lines.append(f"| {key} | {m.get(key)} |")  # type: ignore[union-attr]
-        lines += ["", "Worst distance error per phase (m):", ""]
-        for phase, value in m.get("worst_distance_error_by_phase_m", {}).items():  # type: ignore[union-attr]
-            lines.append(f"- {phase}: {value}")
+            value = m.get(key)  # type: ignore[union-attr]
+            lines.append(f"| {key} | {'not in this log' if value is None else value} |")
+        by_phase = m.get("worst_distance_error_by_phase_m") or {}  # type: ignore[union-attr]
+        if by_phase:
+            lines += ["", "Worst distance error per phase (m):", ""]
+            lines += [f"- {phase}: {value}" for phase, value in by_phase.items()]
     lines += ["", "Link losses (frames the vehicles sent missing from the log by sequence "
                   "number, per system/component; in a damaged log the unreadable ones count "
                   f"too): {s['link_losses']}", "",
-              f"Unreadable: {s['corrupt_bytes_skipped']} corrupt bytes skipped, "
-              f"{s['unknown_frames_skipped']} frames of unknown types, "
-              f"{s['bad_timestamps_rejected']} records with a damaged timestamp; "
-              f"truncated: {s['truncated']}", ""]
+              f"Damaged log: {s['damage']}" if s["damage"] else "Read whole: nothing "
+              "truncated, skipped or rejected.", ""]
     if s["missing"]:
         lines += ["Not in this log:", ""] + [f"- {x}" for x in s["missing"]]  # type: ignore[union-attr]
     lines += ["", "Figures: " + ", ".join(s["figures"])]  # type: ignore[arg-type]

@@ -8,6 +8,7 @@ a .tlog, and `gcs report` reads it back.
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -18,8 +19,11 @@ import pytest
 
 from gcs import report
 from gcs.flightlog import FlightLog
+from gcs.link.modes import SAFETY_ARMED
 from gcs.logreader import TlogIndex
+from gcs.report import FIGURES
 from tests.conftest import SHORT, SQUARE, run_gcs
+from tests.logfiles import VEHICLES, plain_copy, raw_messages
 
 
 def test_short_flight_lifts_the_payload_and_keeps_the_shape(
@@ -65,15 +69,17 @@ def test_report_matches_the_flight(short_flight: tuple[dict, Path], tmp_path: Pa
     out = run_gcs("report", str(log), "--out", str(tmp_path), "--json", "--quiet")
     assert out.returncode == 0, out.stderr
     summary = json.loads(out.stdout)
-    for name in ("formation.png", "trajectories.png", "distance_errors.png",
-                 "accelerations.png", "summary.json", "summary.md"):
-        assert (tmp_path / name).stat().st_size > 1000 or name.endswith((".json", ".md"))
+    assert summary["figures"] == list(FIGURES)
+    _figures_drawn(tmp_path, FIGURES)
     r = summary["metrics"]
     for key in ("worst_distance_error_m", "payload_lift_m", "worst_swing_rad",
-                "worst_bank_rad", "worst_accel_cmd_m_s2", "rope_tension_max_N"):
+                "worst_bank_rad", "worst_accel_cmd_m_s2", "rope_tension_min_N",
+                "rope_tension_max_N"):
         assert r[key] == pytest.approx(m[key], abs=2e-3), key
     assert r["duration_s"] == pytest.approx(m["duration_s"], abs=0.01)
+    assert r["ticks"] == m["ticks"]
     assert r["phases"] == m["phases"]
+    assert summary["damage"] is None
     for phase, value in m["worst_distance_error_by_phase_m"].items():
         assert r["worst_distance_error_by_phase_m"][phase] == pytest.approx(value, abs=2e-3)
     assert summary["missing"] == []
@@ -94,6 +100,16 @@ def test_truncated_log_still_reports(short_flight: tuple[dict, Path], tmp_path: 
     assert "truncated=True" in out.stdout
     parsed = FlightLog.load(cut)
     assert parsed.index.truncated and len(parsed.tick_t) > 10
+    summary = json.loads((tmp_path / "r" / "summary.json").read_text())
+    assert summary["figures"] == list(FIGURES)  # the half it holds, drawn
+    _figures_drawn(tmp_path / "r", FIGURES)
+    r = summary["metrics"]
+    assert r["ticks"] == len(parsed.tick_t)
+    assert r["duration_s"] == pytest.approx(parsed.tick_t[-1] - parsed.tick_t[0], abs=1e-3)
+    assert r["worst_distance_error_m"] > 0 and r["worst_bank_rad"] > 0
+    assert summary["truncated"] and summary["damage"] == parsed.index.damage()
+    md = (tmp_path / "r" / "summary.md").read_text()
+    assert f"Damaged log: {parsed.index.damage()}" in md
 
 
 def test_corrupt_log_still_reports_and_says_what_was_skipped(
@@ -121,6 +137,75 @@ def test_corrupt_log_still_reports_and_says_what_was_skipped(
         assert (tmp_path / "r" / name).stat().st_size > 1000
     text = run_gcs("report", str(bad), "--out", str(tmp_path / "r2"), "--quiet").stdout
     assert "corrupt bytes skipped=" in text and "damaged timestamp rejected=" in text
+
+
+def _figures_drawn(folder: Path, names: tuple[str, ...]) -> None:
+    """Each figure is a real PNG with something drawn in it (not a blank canvas)."""
+    for name in names:
+        image = plt.imread(folder / name)
+        assert image.shape[0] > 300 and image.shape[1] > 300, name
+        assert image[..., :3].std() > 0.05, name
+
+
+def test_plain_autopilot_log_reports_what_its_telemetry_gives(
+        short_flight: tuple[dict, Path], tmp_path: Path) -> None:
+    """The flight re-recorded as a plain autopilot log (the vehicles' frames only): the
+    duration, the worst bank while armed and the distances between the vehicles, each
+    checked against the recorded messages as pymavlink reads them."""
+    m, flight = short_flight
+    plain = plain_copy(flight, tmp_path / "plain.tlog")
+    out = run_gcs("report", str(plain), "--out", str(tmp_path / "r"), "--json", "--quiet")
+    assert out.returncode == 0, out.stderr
+    summary = json.loads(out.stdout)
+    r = summary["metrics"]
+    raw = [x for x in raw_messages(plain) if x.get_srcSystem() in VEHICLES]
+    kinds = {"LOCAL_POSITION_NED", "ATTITUDE", "HEARTBEAT", "SYS_STATUS"}
+    times = [x._timestamp for x in raw if x.get_type() in kinds]
+    assert r["duration_s"] == pytest.approx(max(times) - min(times), abs=1e-3)
+    assert r["duration_s"] == pytest.approx(m["duration_s"], abs=0.5)
+    bank = 0.0
+    for vid in VEHICLES:
+        armed = False
+        for x in raw:
+            if x.get_srcSystem() != vid:
+                continue
+            if x.get_type() == "HEARTBEAT":
+                armed = bool(x.base_mode & SAFETY_ARMED)
+            elif x.get_type() == "ATTITUDE" and armed:
+                bank = max(bank, math.acos(math.cos(x.roll) * math.cos(x.pitch)))
+    assert r["worst_bank_rad"] == pytest.approx(bank, abs=1e-4)
+    assert m["worst_bank_rad"] - 1e-3 <= r["worst_bank_rad"] < 0.36  # armed spans airborne
+    for key in ("worst_distance_error_m", "worst_swing_rad", "worst_accel_cmd_m_s2",
+                "payload_lift_m", "rope_tension_min_N"):
+        assert r[key] is None, key
+    assert r["ticks"] == 0 and r["phases"] == [] and r["worst_distance_error_by_phase_m"] == {}
+    assert any("per-phase distance errors, payload swing or commanded accelerations" in x
+               for x in summary["missing"])
+    assert summary["figures"] == ["formation.png", "trajectories.png"]
+    _figures_drawn(tmp_path / "r", ("formation.png", "trajectories.png"))
+    md = (tmp_path / "r" / "summary.md").read_text()
+    assert f"| duration_s | {r['duration_s']} |" in md
+    assert f"| worst_bank_rad | {r['worst_bank_rad']} |" in md
+    assert "| worst_swing_rad | not in this log |" in md
+
+    # the distances drawn: every pair, each vehicle at its latest position, no desired values
+    log = FlightLog.load(plain)
+    fig = report._formation(log)
+    assert fig is not None
+    lines = fig.axes[0].get_lines()
+    assert sorted(line.get_label() for line in lines) == ["1-2", "1-3", "1-4", "2-3", "2-4",
+                                                          "3-4"]
+    positions = [x for x in raw if x.get_type() == "LOCAL_POSITION_NED"]
+    t0 = min(x._timestamp for x in positions)
+    line = next(line for line in lines if line.get_label() == "1-3")
+    x_data, y_data = (np.asarray(a, dtype=float) for a in line.get_data())
+    assert len(x_data) > 100
+    for k in np.linspace(0, len(x_data) - 1, 25).astype(int):
+        t = t0 + x_data[k]
+        p1, p3 = ([(x.x, x.y, x.z) for x in positions if x.get_srcSystem() == vid
+                   and x._timestamp <= t + 1e-6][-1] for vid in (1, 3))
+        assert y_data[k] == pytest.approx(math.dist(p1, p3), abs=1e-5)
+    plt.close(fig)
 
 
 def test_acceleration_limits_are_drawn_against_their_own_quantity(

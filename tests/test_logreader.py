@@ -3,7 +3,8 @@ encoder), written by the real recorder, read back through the real index.
 
 Each test builds the log a bug was found on: frames dropped from one vehicle,
 a vehicle with a gimbal, a GCS whose senders share its system id, an autopilot
-script sending NAMED_VALUE_INT, GLOBAL_POSITION_INT only, damaged bytes.
+script sending NAMED_VALUE_INT, GLOBAL_POSITION_INT only, damaged bytes, ArduCopters
+whose local frames have different origins and one that logged no position.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from gcs.link.encoder import MavlinkEncoder
 from gcs.link.modes import CUSTOM_MODE_ENABLED, SAFETY_ARMED, SimMode
 from gcs.logreader import TlogIndex
 from gcs.recorder import TlogRecorder
+from tests.logfiles import HOME, ardupilot_log, raw_messages
 
 EPOCH = 1_700_000_000.0
 RATE = 10.0  # vehicle messages per second
@@ -153,3 +155,41 @@ def test_damaged_frames_and_stamps_are_left_out_and_counted(tmp_path: Path) -> N
     assert np.all(np.diff(index.t) > 0) and index.t[-1] - index.t[0] == pytest.approx(9.9)
     log = FlightLog.load(path)
     assert log.link_losses() == {(1, 1): 2}  # the two damaged records are missing frames
+
+
+@pytest.mark.parametrize("shared_origin", [False, True])
+def test_ardupilot_vehicles_are_placed_in_one_frame(tmp_path: Path, shared_origin: bool) -> None:
+    """Each ArduCopter's LOCAL_POSITION_NED is about its own origin (where its estimator
+    started), so three vehicles flying 3 m apart all read (0, 0) there: they are placed
+    from GLOBAL_POSITION_INT then; with a shared origin, from their local positions."""
+    path = ardupilot_log(tmp_path / "ap.tlog", shared_origin=shared_origin)
+    log = FlightLog.load(path)
+    assert sorted(log.tracks) == [1, 2, 3, 4] and log.ground == {255}
+    local = {s: [(m.x, m.y, m.z) for m in raw_messages(path)
+                 if m.get_type() == "LOCAL_POSITION_NED" and m.get_srcSystem() == s]
+             for s in (1, 2, 3)}
+    for s in (1, 2, 3):
+        p = log.tracks[s].p_ned
+        np.testing.assert_allclose(p[:, 1], 3.0 * (s - 1), atol=0.02)  # metres east
+        np.testing.assert_allclose(p[:, 0], 0.05 * np.arange(len(p)), atol=0.02)
+        if shared_origin:
+            np.testing.assert_array_equal(p, np.array(local[s], dtype=np.float32))
+    placing = [m for m in log.missing if "GLOBAL_POSITION_INT about" in m]
+    if shared_origin:
+        assert log.origin is None and log.origin_spread < 0.05 and placing == []
+    else:
+        assert log.origin is not None and log.origin_spread == pytest.approx(6.0, abs=0.02)
+        assert placing == [
+            "a shared local frame (the vehicles' LOCAL_POSITION_NED origins differ by up to "
+            f"6.0 m): drawn from GLOBAL_POSITION_INT about {HOME[0]:.6f}, {HOME[1]:.6f}, "
+            f"{HOME[2] + 2.0:.1f} m, flat earth"]
+    four = log.tracks[4]  # attitude, mode and battery, no position: kept
+    assert len(four.t) == 0 and len(four.att_t) == 60 and four.mode(-1) == "GUIDED"
+    assert bool(four.armed[-1]) and four.battery[-1] == 88.0
+    assert "vehicle positions from vehicle 4 (no LOCAL_POSITION_NED or GLOBAL_POSITION_INT)" \
+        in log.missing
+    metrics = log.telemetry_metrics()
+    assert metrics["duration_s"] == pytest.approx(5.9, abs=1e-3)
+    worst = max(math.acos(math.cos(0.2 * math.sin(k / RATE + s)) * math.cos(0.05))
+                for k in range(10, 60) for s in (1, 2, 3, 4))  # armed from 1 s on
+    assert metrics["worst_bank_rad"] == pytest.approx(worst, abs=1e-4)  # not the 0.5 disarmed

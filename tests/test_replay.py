@@ -2,7 +2,9 @@
 
 Real parts: `gcs fly` records a simulated flight (its own sim process), the
 recorded bytes are read back independently with pymavlink, a plain autopilot
-log is written by the real recorder, and `gcs replay` serves a real viser page.
+log is written by the real recorder, `gcs replay` serves a real viser page,
+and a websocket client reads that page as a browser does (what it is sent,
+decoded) and clicks and chooses as a browser does.
 """
 
 from __future__ import annotations
@@ -10,25 +12,42 @@ from __future__ import annotations
 import html as html_lib
 import re
 import signal
-import socket
 import subprocess
 import sys
+import threading
 import time
-import urllib.request
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
+from typing import cast
 
+import msgspec
 import numpy as np
 import pytest
-from pymavlink import mavutil
+import viser
+import zstandard
+from viser import _messages as viser_messages
+from websockets.exceptions import ConnectionClosed
+from websockets.sync.client import connect
 
 from gcs.flightlog import FlightLog
+from gcs.link.dialect import mavlink
 from gcs.link.encoder import MavlinkEncoder
 from gcs.link.modes import SAFETY_ARMED, SimMode
-from gcs.recorder import TlogRecorder
+from gcs.logreader import TlogIndex
+from gcs.simprocess import free_tcp_port
 from tests.conftest import run_gcs
+from tests.logfiles import ardupilot_log, plain_copy, raw_messages, with_frame
+from web.actions import OperatorActions
+from web.control import ControlLock
+from web.panel import ControlPanel
 from web.replay import ReplayCursor
 from web.replay_page import ReplayUi, replay_summary_html
 from web.timeline import Timeline
+
+TIMELINE = {"Play", "Pause", "Speed", "Time (s)", "Event", "Jump to event", "Previous event",
+            "Next event"}
+"""The replay's own controls (what a viewer of the replay page must get)."""
 
 
 @pytest.fixture
@@ -36,24 +55,143 @@ def flight(short_flight: tuple[dict, Path]) -> Path:
     return short_flight[1]
 
 
-def _raw(path: Path) -> list:
-    """Every message of the file, read by pymavlink (not by our reader)."""
-    conn = mavutil.mavlink_connection(str(path), dialect="common")
-    out = []
-    while (m := conn.recv_match()) is not None:
-        if m.get_type() != "BAD_DATA":
-            out.append(m)
-    return out
+class PageViewer:
+    """A websocket viewer of a viser page: decodes what the page sends it, as the browser
+    does, and clicks buttons and picks dropdown values as the browser does.
+
+    ``widgets`` holds every GUI element the viewer was sent, by id: its message type
+    and its properties (label, options, content...) with every later update applied.
+    """
+
+    def __init__(self, port: int) -> None:
+        self.widgets: dict[str, dict[str, object]] = {}
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._ws = connect(f"ws://127.0.0.1:{port}",
+                           subprotocols=[f"viser-v{viser.__version__}"], max_size=None)
+        self._thread = threading.Thread(target=self._read, daemon=True)
+        self._thread.start()
+        camera = viser_messages.ViewerCameraMessage(  # viser counts a viewer once it has one
+            wxyz=(1.0, 0.0, 0.0, 0.0), position=(-3.0, -1.0, -2.0), fov=1.0, near=0.01,
+            far=1000.0, image_height=600, image_width=800, look_at=(0.0, 0.0, 0.0),
+            up_direction=(0.0, 0.0, -1.0))
+        self._send(camera)
+
+    def _read(self) -> None:
+        unpack = zstandard.ZstdDecompressor()
+        while not self._stop.is_set():
+            try:
+                raw = self._ws.recv(timeout=0.1)
+            except TimeoutError:
+                continue
+            except ConnectionClosed:
+                return
+            assert isinstance(raw, bytes)
+            size, packed = (int.from_bytes(raw[k : k + 8], "little") for k in (0, 8))
+            inner = unpack.decompress(raw[16 : 16 + packed], max_output_size=size)
+            with self._lock:
+                for m in msgspec.msgpack.decode(inner)["messages"]:
+                    self._take(m)
+
+    def _take(self, m: dict) -> None:
+        kind = m["type"]
+        if kind.startswith("Gui") and "props" in m and "uuid" in m:
+            self.widgets[m["uuid"]] = {"type": kind, "value": m.get("value"), **m["props"]}
+        elif kind == "GuiUpdateMessage" and m["uuid"] in self.widgets:
+            self.widgets[m["uuid"]].update(m["updates"])
+        elif kind == "GuiRemoveMessage":
+            self.widgets.pop(m["uuid"], None)
+
+    def _send(self, message: viser_messages.Message) -> None:
+        self._ws.send(msgspec.msgpack.encode(message.as_serializable_dict()))
+
+    def texts(self) -> set[str]:
+        """Every label, option and HTML or Markdown text the viewer was sent (non-empty)."""
+        out: set[str] = set()
+        with self._lock:
+            for w in self.widgets.values():
+                out.update(str(x) for x in (w.get("label"), w.get("content"), w.get("_markdown"))
+                           if x)
+                out.update(str(x) for x in w.get("options") or ())  # type: ignore[attr-defined]
+        return out
+
+    def uuid(self, label: str) -> str:
+        """The id of the element labelled ``label`` (exactly one must exist)."""
+        with self._lock:
+            (found,) = [u for u, w in self.widgets.items() if w.get("label") == label]
+        return found
+
+    def click(self, label: str) -> None:
+        self._send(viser_messages.GuiUpdateMessage(self.uuid(label), {"value": True}))
+
+    def choose(self, label: str, value: str) -> None:
+        self._send(viser_messages.GuiUpdateMessage(self.uuid(label), {"value": value}))
+
+    @staticmethod
+    def wait_for(what: Callable[[], bool], timeout: float = 10.0) -> bool:
+        """Whether ``what`` came true within ``timeout`` seconds (the page answers a
+        viewer on viser's threads)."""
+        deadline = time.monotonic() + timeout
+        while not what():
+            if time.monotonic() > deadline:
+                return False
+            time.sleep(0.02)
+        return True
+
+    def settled(self, quiet: float = 0.5) -> set[str]:
+        """:meth:`texts` once nothing new arrived for ``quiet`` seconds."""
+        last: set[str] | None = None
+        while (now := self.texts()) != last:
+            last = now
+            time.sleep(quiet)
+        return now
+
+    def close(self) -> None:
+        self._stop.set()
+        self._ws.close()
+        self._thread.join(timeout=2.0)
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
+@contextmanager
+def viewer_of(port: int, timeout: float = 10.0) -> Iterator[PageViewer]:
+    viewer = PageViewer(port)
+    try:
+        assert viewer.wait_for(lambda: bool(viewer.widgets), timeout), "the page sent nothing"
+        yield viewer
+    finally:
+        viewer.close()
+
+
+@contextmanager
+def served(path: Path) -> Iterator[tuple[int, list[str]]]:
+    """``gcs replay PATH`` in its own process: its port, and its stdout lines from its
+    address on, once stopped (by Ctrl-C, which must end it with status 0)."""
+    port = free_tcp_port()
+    proc = subprocess.Popen([sys.executable, "-m", "gcs", "replay", str(path), "--port",
+                             str(port), "--quiet"], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    lines: list[str] = []
+    try:
+        deadline = time.monotonic() + 60
+        while not lines or "GCS replay:" not in lines[-1]:
+            assert time.monotonic() < deadline and proc.poll() is None, \
+                proc.stderr.read()  # type: ignore[union-attr]
+            lines.append(proc.stdout.readline().rstrip("\n"))  # type: ignore[union-attr]
+        assert lines[-1].startswith(f"GCS replay: http://127.0.0.1:{port}")
+        del lines[:-1]  # viser's banner
+        yield port, lines
+        proc.send_signal(signal.SIGINT)
+        out = proc.stdout.read()  # type: ignore[union-attr]  # (communicate() would skip
+        assert proc.wait(timeout=20) == 0  # what readline() already buffered)
+        lines += [line for line in out.splitlines() if not line.startswith("(viser)")]
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
 
 
 def test_replayed_positions_are_the_recorded_ones(flight: Path) -> None:
-    raw = [m for m in _raw(flight) if m.get_type() == "LOCAL_POSITION_NED"]
+    raw = [m for m in raw_messages(flight) if m.get_type() == "LOCAL_POSITION_NED"]
     cursor = ReplayCursor(FlightLog.load(flight))
     assert cursor.ids == (1, 2, 3, 4)
     checked = 0
@@ -80,8 +218,8 @@ def _page(ui: ReplayUi) -> tuple:
 
 def test_scrubbing_backwards_gives_the_earlier_state(flight: Path) -> None:
     log = FlightLog.load(flight)
-    ui = ReplayUi(log, port=_free_port())
-    direct = ReplayUi(log, port=_free_port())  # jumps straight to the moment, never back
+    ui = ReplayUi(log, port=free_tcp_port())
+    direct = ReplayUi(log, port=free_tcp_port())  # jumps straight to the moment, never back
     try:
         start = ui.timeline.start
         fresh = ReplayCursor(log).state(start + 5.0)  # same moment, by a cursor never moved
@@ -117,18 +255,17 @@ def test_scrubbing_backwards_gives_the_earlier_state(flight: Path) -> None:
 
 
 def test_replay_shows_mode_armed_and_battery_as_the_live_table(flight: Path) -> None:
-    raw = _raw(flight)
+    raw = raw_messages(flight)
     log = FlightLog.load(flight)
-    ui = ReplayUi(log, port=_free_port())
+    ui = ReplayUi(log, port=free_tcp_port())
     landing = next(t for t, name in log.phase_changes() if name == "landing")
     seen_states = set()
     try:
         for t in (ui.timeline.start + 10.0, ui.timeline.start + 20.0, landing + 1.0):
             ui.seek(t)
-            rows = dict(re.findall(r'data-gcs="vehicle-(\d)">(.*?)</tr>', ui._vehicles.content))
+            rows = _vehicle_rows(ui._vehicles.content)
             for vid in (1, 2, 3, 4):
-                cells = [html_lib.unescape(re.sub("<[^>]+>", "", c)).strip()
-                         for c in re.findall(r"<td[^>]*>(.*?)</td>", rows[str(vid)])]
+                cells = rows[vid]
                 hb = [m for m in raw if m.get_type() == "HEARTBEAT" and m._timestamp <= t
                       and m.get_srcSystem() == vid][-1]
                 status = [m for m in raw if m.get_type() == "SYS_STATUS" and m._timestamp <= t
@@ -170,14 +307,7 @@ def test_timeline_plays_pauses_and_clamps() -> None:
 
 def test_plain_autopilot_log_opens_and_says_what_is_missing(flight: Path,
                                                             tmp_path: Path) -> None:
-    plain = tmp_path / "autopilot.tlog"
-    rec = TlogRecorder(plain, encoder=MavlinkEncoder(system_id=255, component_id=190),
-                       epoch=0.0)
-    for m in _raw(flight):
-        if m.get_srcSystem() in (1, 2, 3, 4):  # vehicles only: no GCS internals
-            rec.frame(m._timestamp, m.get_msgbuf())
-    rec.close()
-    log = FlightLog.load(plain)
+    log = FlightLog.load(plain_copy(flight, tmp_path / "autopilot.tlog"))
     assert log.team is None and len(log.tick_t) == 0
     assert any("guidance internals" in m for m in log.missing)
     cursor = ReplayCursor(log)
@@ -186,7 +316,7 @@ def test_plain_autopilot_log_opens_and_says_what_is_missing(flight: Path,
     assert state.truth is None
     html = replay_summary_html(state, start=cursor.start, name="x", missing=log.missing)
     assert "guidance internals" in html and "team header" in html
-    ui = ReplayUi(log, port=_free_port())  # draws without edges, ticks or truth
+    ui = ReplayUi(log, port=free_tcp_port())  # draws without edges, ticks or truth
     try:
         ui.seek(cursor.start + 20.0)
     finally:
@@ -195,35 +325,158 @@ def test_plain_autopilot_log_opens_and_says_what_is_missing(flight: Path,
 
 def test_replay_command_serves_the_page_without_controls(flight: Path,
                                                          tmp_path: Path) -> None:
+    """What reaches a viewer of `gcs replay`: the timeline, and none of the live page's
+    operator controls (those are built per viewer, so only a viewer can tell)."""
     bad = tmp_path / "bad.tlog"
     bad.write_bytes(b"not a log at all" * 10)
     out = run_gcs("replay", str(bad))
     assert out.returncode == 2
     assert len(out.stderr.strip().splitlines()) == 1 and "error" in out.stderr
 
-    port = _free_port()
-    proc = subprocess.Popen([sys.executable, "-m", "gcs", "replay", str(flight), "--port",
-                             str(port)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True)
-    try:
-        line = ""
-        deadline = time.monotonic() + 30
-        while "GCS replay:" not in line and time.monotonic() < deadline:
-            line = proc.stdout.readline()  # type: ignore[union-attr]
-        assert f"http://127.0.0.1:{port}" in line
-        with urllib.request.urlopen(f"http://127.0.0.1:{port}", timeout=5) as r:
-            assert r.status == 200
-        proc.send_signal(signal.SIGINT)
-        assert proc.wait(timeout=10) == 0
+    live = viser.ViserServer(host="127.0.0.1", port=free_tcp_port(), verbose=False)
+    try:  # what the live page gives each viewer: its control panel
+        live.on_client_connect(lambda client: ControlPanel(
+            client, cast(OperatorActions, object()), ControlLock(),
+            on_control_change=lambda: None))
+        with viewer_of(live.get_port()) as viewer:
+            controls = viewer.settled()
     finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
+        live.stop()
+    assert {"ABORT: hold, then land", "Take control", "guidance on"} <= controls
+    assert any("data-gcs-pad" in text for text in controls)  # the sticks
 
-    ui = ReplayUi(FlightLog.load(flight), port=_free_port())
+    with served(flight) as (port, lines), viewer_of(port) as viewer:
+        page = viewer.settled()
+    assert page >= TIMELINE
+    assert not page & controls, page & controls
+    assert not any("data-gcs-pad" in text for text in page)
+    assert lines[1:] == ["stopping…"]  # a whole log: no note
+
+
+@pytest.mark.parametrize("damage", ["cut", "flipped bytes"])
+def test_replay_of_a_damaged_log_says_what_could_not_be_read(flight: Path, tmp_path: Path,
+                                                             damage: str) -> None:
+    data = bytearray(flight.read_bytes())
+    index = TlogIndex.build(flight)
+    if damage == "cut":  # inside a frame: a cut on a record boundary is a whole log
+        middle = len(index) // 2
+        data = data[: int(index.offset[middle]) + int(index.length[middle]) // 2]
+    else:
+        rng = np.random.default_rng(5)
+        for k in rng.choice(len(data), 300, replace=False):
+            data[k] ^= int(rng.integers(1, 256))
+    bad = tmp_path / "damaged.tlog"
+    bad.write_bytes(bytes(data))
+    note = FlightLog.load(bad).index.damage()
+    assert note is not None
+    with served(bad) as (port, lines), viewer_of(port) as viewer:
+        shown = f"damaged log: {html_lib.escape(note)}</li>"
+        assert viewer.wait_for(lambda: any('data-gcs="missing"' in t and shown in t
+                                    for t in viewer.texts()))
+    assert lines[1:] == [f"note: {note}", "stopping…"]
+    if damage == "cut":
+        assert "truncated=True" in note
+        report = run_gcs("report", str(bad), "--out", str(tmp_path / "r"), "--quiet")
+        assert f"note: {note}" in report.stdout.splitlines()  # one wording for both
+    else:
+        assert "corrupt bytes skipped=0" not in note
+
+
+def _event_log(flight: Path, tmp_path: Path) -> tuple[Path, float, float]:
+    """The flight with a warning and a notice from vehicle 2 (real STATUSTEXT frames),
+    20 s and 21 s in; returns the log and the two moments."""
+    enc = MavlinkEncoder(system_id=2, component_id=1)
+    start = float(TlogIndex.build(flight).t.min())
+    warn_t, notice_t = start + 20.0, start + 21.0
+    path = with_frame(flight, tmp_path / "warned.tlog", warn_t, enc.encode(
+        enc.mav.statustext_encode(mavlink.MAV_SEVERITY_WARNING, b"rope snag")))
+    path = with_frame(path, tmp_path / "noted.tlog", notice_t, enc.encode(
+        enc.mav.statustext_encode(mavlink.MAV_SEVERITY_NOTICE, b"payload seen")))
+    return path, warn_t, notice_t
+
+
+def test_a_viewer_steps_and_jumps_through_the_events(flight: Path, tmp_path: Path) -> None:
+    path, warn_t, notice_t = _event_log(flight, tmp_path)
+    log = FlightLog.load(path)
+    ui = ReplayUi(log, name="warned", port=free_tcp_port())
     try:
-        labels = {h.label for h in ui.server.gui._gui_input_handle_from_uuid.values()}
+        events = ui.cursor.events
+        assert [(e.kind, e.text) for e in events if e.t in (warn_t, notice_t)] == \
+            [("warning", "2: rope snag"), ("text", "2: payload seen")]
+        change = next(e for e in events if e.text == "phase: formation")
+        k = events.index(change)
+        with viewer_of(ui.server.get_port()) as viewer:
+            viewer.choose("Speed", "4x")
+            viewer.wait_for(lambda: ui.timeline.speed == 4.0)
+            assert ui.timeline.speed == 4.0
+
+            def lands_on(t: float) -> None:
+                viewer.wait_for(lambda: ui.timeline.t == t)
+                assert ui.timeline.t == t
+
+            def pick(ending: str) -> None:
+                options = viewer.widgets[viewer.uuid("Event")]["options"]
+                viewer.choose("Event", next(o for o in options if o.endswith(ending)))  # type: ignore[attr-defined]
+                viewer.click("Jump to event")
+
+            pick("phase: formation")
+            lands_on(change.t)  # exactly the tick where the phase changed
+            assert viewer.wait_for(lambda: any(  # and the viewer is shown that tick's phase
+                'data-gcs="phase" style="font-size:1.2em">formation<' in t
+                for t in viewer.texts()))
+            viewer.click("Next event")
+            lands_on(events[k + 1].t)
+            viewer.click("Previous event")
+            lands_on(change.t)
+            ui.seek((change.t + events[k + 1].t) / 2)  # between two events: back to the change
+            viewer.click("Previous event")
+            lands_on(change.t)
+            ui.seek((events[k - 1].t + change.t) / 2)  # and forwards onto it
+            viewer.click("Next event")
+            lands_on(change.t)
+
+            pick("rope snag")
+            lands_on(warn_t)
+            warned = re.compile(r'<div style="color:#e67e22"><span[^>]*>[^<]*</span> 2: rope snag<')
+            assert viewer.wait_for(lambda: any(warned.search(t) for t in viewer.texts()))
     finally:
         ui.close()
-    assert {"Play", "Pause", "Speed", "Time (s)", "Jump to event"} <= labels
-    assert not labels & {"ABORT", "Take control", "Arm", "Take off", "Land"}
+
+
+def test_an_ardupilot_team_replays_with_a_vehicle_that_sent_no_position(tmp_path: Path) -> None:
+    """ArduCopters whose local origins differ are placed from GPS; a vehicle without any
+    position still has its row (mode, armed, battery) and no place in the scene."""
+    log = FlightLog.load(ardupilot_log(tmp_path / "ap.tlog", shared_origin=False))
+    ui = ReplayUi(log, name="ap", port=free_tcp_port())
+    try:
+        assert ui.timeline.duration == pytest.approx(5.9, abs=1e-3)
+        ui.seek(ui.timeline.start + 3.05)  # the 31st sample (k = 30) is the latest
+        state = ui.cursor.state(ui.timeline.t)
+        rows = _vehicle_rows(ui._vehicles.content)
+        summary = html_lib.unescape(ui._summary.content)
+    finally:
+        ui.close()
+    p = state.fleet.p_ned
+    np.testing.assert_allclose(p[1:3, 1] - p[0, 1], [3.0, 6.0], atol=0.02)  # 3 m apart east
+    assert np.isnan(p[3]).all()
+    for vid in (1, 2, 3, 4):
+        assert rows[vid][2:5] == ["GUIDED", "yes", f"{90 - 30 // 20}"]
+    assert rows[4][1].endswith("stale") and rows[4][6] == "–"  # no position, no altitude
+    assert rows[1][1].endswith("ok")
+    assert "vehicle positions from vehicle 4" in summary
+    assert "origins differ by up to 6.0 m" in summary
+
+    alone = FlightLog.load(ardupilot_log(tmp_path / "attitude.tlog", shared_origin=False,
+                                         placed=()))
+    assert sorted(alone.tracks) == [1, 2, 3, 4]
+    cursor = ReplayCursor(alone)
+    assert cursor.end - cursor.start == pytest.approx(5.9, abs=1e-3)  # not 0..0 s
+    assert cursor.state(cursor.start + 2.0).fleet.modes == ("GUIDED",) * 4
+
+
+def _vehicle_rows(table: str) -> dict[int, list[str]]:
+    """The vehicles table's cells as text, by vehicle id."""
+    rows = dict(re.findall(r'data-gcs="vehicle-(\d+)">(.*?)</tr>', table))
+    return {int(vid): [html_lib.unescape(re.sub("<[^>]+>", "", c)).strip()
+                       for c in re.findall(r"<td[^>]*>(.*?)</td>", row)]
+            for vid, row in rows.items()}

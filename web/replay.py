@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gcs.fleet import FleetState
-from gcs.flightlog import FlightLog, Track
+from gcs.flightlog import FlightLog, Track, tilt_angle
 from gcs.phases import Phase
 from gcs.simtruth import SimTruth
 from web.frame import TeamView
@@ -80,15 +80,10 @@ class ReplayCursor:
         team = log.team
         self.ids: tuple[int, ...] = (tuple(team["ids"]) if team is not None  # type: ignore[arg-type]
                                      else tuple(sorted(log.tracks)))
-        starts = [tr.t[0] for tr in log.tracks.values() if len(tr.t)]
-        ends = [tr.t[-1] for tr in log.tracks.values() if len(tr.t)]
-        if len(log.tick_t):
-            starts.append(log.tick_t[0])
-            ends.append(log.tick_t[-1])
-        starts += [e[0] for e in log.texts]
-        ends += [e[0] for e in log.texts]
-        self.start = float(min(starts)) if starts else 0.0
-        self.end = float(max(ends)) if ends else self.start
+        # the whole log, whatever its records hold: a vehicle without positions
+        # (or a log of texts and modes only) still has a timeline to scrub
+        self.start = float(log.index.t.min())
+        self.end = float(log.index.t.max())
         self.events = _events(log)
         self._event_t = np.array([e.t for e in self.events])
 
@@ -118,8 +113,8 @@ class ReplayCursor:
                 age[i] = t - track.t[k]
             j = _latest(track.att_t, t)
             if j >= 0:
-                roll, pitch, yaw[i] = track.rpy[j]
-                tilt[i] = math.acos(max(-1.0, min(1.0, math.cos(roll) * math.cos(pitch))))
+                yaw[i] = track.rpy[j, 2]
+                tilt[i] = tilt_angle(track.rpy[j])
             hb_age[i], armed[i], modes[i] = _heartbeat(track, t)
             b = _latest(track.battery_t, t)
             if b >= 0:

@@ -14,7 +14,6 @@ import html
 import math
 import threading
 import time
-from pathlib import Path
 
 import numpy as np
 import viser
@@ -47,8 +46,12 @@ def _num(x: float, fmt: str) -> str:
 
 
 def replay_summary_html(state: ReplayState, *, start: float, name: str,
-                        missing: list[str]) -> str:
-    """Replay time, phase, the recorded command and worst error, and what the log lacks."""
+                        missing: list[str], damage: str | None = None) -> str:
+    """Replay time, phase, the recorded command and worst error, and what the log lacks.
+
+    ``damage`` (:meth:`~gcs.logreader.TlogIndex.damage`) is shown beside what is
+    missing: a cut or corrupt log lacks what its damaged records held.
+    """
     phase = state.phase.text if state.phase is not None else "–"
     v = state.values
     err = state.arrays.get("dist_err")
@@ -63,15 +66,16 @@ def replay_summary_html(state: ReplayState, *, start: float, name: str,
     if state.truth is not None:
         x, y, z = state.truth.payload_p_ned
         payload = f"{-z:.2f} m up at ({x:.2f}, {y:.2f}) m (simulator)"
-    lack = ("".join(f"<li>{html.escape(m)}</li>" for m in missing) if missing
-            else "<li>nothing</li>")
+    lack = "".join(f"<li>{html.escape(m)}</li>" for m in missing)
+    if damage is not None:
+        lack += f'<li data-gcs="damaged">damaged log: {html.escape(damage)}</li>'
     return (f'{_DIV}<div><b>REPLAY</b> of {html.escape(name)} at '
             f'<span data-gcs="replay-time">{state.t - start:.2f}</span> s</div>'
             f'<div>phase <b data-gcs="phase" style="font-size:1.2em">{phase}</b> · '
             f'worst distance error {_num(worst, ".3f")} m</div>'
             f'<div>command {command}</div><div>payload {payload}</div>'
             f'<div data-gcs="missing" style="color:#e67e22">missing from the log:'
-            f'<ul style="margin:0">{lack}</ul></div></div>')
+            f'<ul style="margin:0">{lack or "<li>nothing</li>"}</ul></div></div>')
 
 
 def _vehicles_html(state: ReplayState, stale_after: float) -> str:
@@ -273,18 +277,25 @@ class ReplayUi:
                 if self._plots is not None:
                     self._plots.update(self._history)
             self._summary.content = replay_summary_html(
-                state, start=self.timeline.start, name=self._name, missing=log.missing)
+                state, start=self.timeline.start, name=self._name, missing=log.missing,
+                damage=log.index.damage())
             self._vehicles.content = _vehicles_html(state, self.view.stale_after)
             self._events.content = _events_html(state, self.timeline.start)
 
 
-def run_replay(path: str | Path, *, host: str, port: int) -> int:
-    """Serve the replay of ``path`` until Ctrl-C; LogError for a file that is no log."""
-    log = FlightLog.load(path)
-    ui = ReplayUi(log, name=Path(path).name, host=host, port=port)
+def run_replay(log: FlightLog, *, name: str, host: str, port: int) -> int:
+    """Serve the replay of ``log`` (called ``name`` on the page) until Ctrl-C.
+
+    Prints the page's address and, for a damaged log, the same note as ``gcs
+    report`` (what could not be read), which the page shows too.
+    """
+    ui = ReplayUi(log, name=name, host=host, port=port)
     try:
         ui.start()
         print(f"GCS replay: {ui.url}  (Ctrl-C to stop)", flush=True)
+        damage = log.index.damage()
+        if damage is not None:
+            print(f"note: {damage}", flush=True)
         while True:
             time.sleep(0.5)
     except KeyboardInterrupt:
