@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import colorsys
 import dataclasses
 import math
 from pathlib import Path
@@ -49,17 +50,44 @@ def test_tension_colours_read_slack_nominal_and_overload() -> None:
     t_eq = VIEW.nominal_tension
     rgb = palette.tension_colors(np.array([0.0, t_eq, 2 * t_eq, 5 * t_eq, np.nan]), t_eq)
     assert rgb.dtype == np.uint8 and rgb.shape == (5, 3)
-    assert tuple(rgb[0]) == (120, 144, 156)  # slack
-    assert tuple(rgb[1]) == (46, 204, 113)  # nominal: green
-    assert tuple(rgb[2]) == tuple(rgb[3]) == (231, 76, 60)  # twice nominal or more: red
+    assert tuple(rgb[0]) == palette.SLACK
+    assert tuple(rgb[1]) == palette.TAUT  # nominal
+    assert tuple(rgb[2]) == tuple(rgb[3]) == palette.BAD  # twice nominal or more: red
     assert tuple(rgb[4]) == tuple(palette.UNKNOWN)
 
 
 def test_error_colours_are_symmetric_and_saturate() -> None:
     rgb = palette.error_colors(np.array([0.0, 0.15, -0.15, 0.3, 2.0]), 0.3)
-    assert tuple(rgb[0]) == (46, 204, 113)
-    assert tuple(rgb[1]) == tuple(rgb[2]) == (241, 196, 15)
-    assert tuple(rgb[3]) == tuple(rgb[4]) == (231, 76, 60)
+    assert tuple(rgb[0]) == palette.EDGE_OK
+    assert tuple(rgb[1]) == tuple(rgb[2]) == palette.WARN
+    assert tuple(rgb[3]) == tuple(rgb[4]) == palette.BAD
+
+
+def _hue_saturation(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Hue (degrees) and saturation of (..., 3) uint8 colours."""
+    hsv = np.array([colorsys.rgb_to_hsv(*(c / 255.0)) for c in np.reshape(rgb, (-1, 3))])
+    return 360.0 * hsv[:, 0], hsv[:, 1]
+
+
+def test_only_an_ok_vehicle_is_green_and_only_the_payload_magenta() -> None:
+    """Every other colour of the scene, every step of every ramp included, is at least 30
+    degrees of hue from both, or too grey to be mistaken (saturation below 0.3)."""
+    x = np.linspace(0.0, 3.0, 301)
+    others = np.vstack([
+        palette.tension_colors(x, 1.0), palette.error_colors(x, 1.0),
+        palette.state_colors(np.array([s for s in palette.VehicleState
+                                       if s is not palette.VehicleState.OK])),
+        [palette.GHOST, palette.VELOCITY, palette.TRAIL, palette.UNKNOWN, palette.GEOFENCE,
+         palette.PAYLOAD_ESTIMATED],
+    ])
+    hue, saturation = _hue_saturation(others)
+    for own in (palette.OK, palette.PAYLOAD):
+        (own_hue,), (own_saturation,) = _hue_saturation(np.array([own]))
+        assert own_saturation > 0.6
+        apart = np.abs((hue - own_hue + 180.0) % 360.0 - 180.0)
+        close = (apart < 30.0) & (saturation >= 0.3)
+        assert not close.any(), (own, others[close][:5])
+    assert tuple(palette.state_colors(np.array([palette.VehicleState.OK]))[0]) == palette.OK
 
 
 def test_ramp_interpolates_between_stops() -> None:
@@ -172,11 +200,11 @@ def test_frame_of_a_perfect_team_with_sim_truth() -> None:
     np.testing.assert_allclose(frame.payload_p, [1.0, 2.0, -0.6])
     assert frame.ropes.shape == (4, 2, 3)
     # ropes follow the truth's vehicle order: vehicle 1 has the truth's last tension (red)
-    assert tuple(frame.rope_colors[0, 0]) == (231, 76, 60)
-    assert tuple(frame.rope_colors[3, 1]) == (120, 144, 156)
-    # exact shape: every edge green, the ghost on top of the team
+    assert tuple(frame.rope_colors[0, 0]) == palette.BAD
+    assert tuple(frame.rope_colors[3, 1]) == palette.SLACK
+    # exact shape: every edge at its desired length, the ghost on top of the team
     assert frame.edges.shape == (6, 2, 3)
-    assert np.all(frame.edge_colors == (46, 204, 113))
+    assert np.all(frame.edge_colors == palette.EDGE_OK)
     np.testing.assert_allclose(frame.ghost_edges, frame.edges, atol=1e-9)
     # arrows for the three moving vehicles, one second long
     assert frame.velocity.shape == (3, 2, 3)
@@ -215,7 +243,7 @@ def test_without_truth_ropes_are_coloured_by_the_pull_estimated_from_tilt() -> N
     frame = build_frame(VIEW, fleet, scale=1.0, truth=None, trails=Trails(4))
     assert not frame.payload_measured
     colors = [tuple(int(c) for c in frame.rope_colors[i, 0]) for i in range(4)]
-    assert colors == [(120, 144, 156), (46, 204, 113), (231, 76, 60),
+    assert colors == [palette.SLACK, palette.TAUT, palette.BAD,
                       tuple(int(c) for c in palette.UNKNOWN)]
     np.testing.assert_array_equal(
         frame.rope_colors[:3, 1],
@@ -225,7 +253,7 @@ def test_without_truth_ropes_are_coloured_by_the_pull_estimated_from_tilt() -> N
     accel = np.zeros((4, 2))
     accel[2] = [g * math.tan(double_tilt), 0.0]
     steering = build_frame(VIEW, fleet, scale=1.0, truth=None, trails=Trails(4), accel_cmd=accel)
-    assert tuple(int(c) for c in steering.rope_colors[2, 0]) == (120, 144, 156)
+    assert tuple(int(c) for c in steering.rope_colors[2, 0]) == palette.SLACK
     # a view without the airframe (a replayed log) cannot estimate: grey
     bare = dataclasses.replace(VIEW, mass=math.nan, nominal_pull=math.nan)
     unknown = build_frame(bare, fleet, scale=1.0, truth=None, trails=Trails(4))
@@ -235,9 +263,9 @@ def test_without_truth_ropes_are_coloured_by_the_pull_estimated_from_tilt() -> N
 def test_edge_colours_follow_the_operator_scale() -> None:
     fleet = fleet_at(1.5 * VIEW.desired_xy)  # the shape grown by half
     at_one = build_frame(VIEW, fleet, scale=1.0, truth=None, trails=Trails(4))
-    assert np.all(at_one.edge_colors == (231, 76, 60))  # 0.5 m and more too long
+    assert np.all(at_one.edge_colors == palette.BAD)  # 0.5 m and more too long
     at_scale = build_frame(VIEW, fleet, scale=1.5, truth=None, trails=Trails(4))
-    assert np.all(at_scale.edge_colors == (46, 204, 113))
+    assert np.all(at_scale.edge_colors == palette.EDGE_OK)
     np.testing.assert_allclose(at_scale.ghost_edges[:, :, :2], at_scale.edges[:, :, :2],
                                atol=1e-9)
 

@@ -20,6 +20,7 @@ from gcs.phases import Phase
 from gcs.runtime import Event, RuntimeSnapshot, TickStats
 from gcs.safety import SafetyEvent, SafetyReason, SafetyVerdict
 from gcs.simtruth import SimTruth
+from web import palette
 from web.frame import TeamView
 from web.history import History
 from web.status import UiStats, events_html, rope_pull_estimate, summary_html, vehicles_html
@@ -97,7 +98,8 @@ def test_the_rope_legend_says_whether_ropes_are_measured_or_estimated() -> None:
     assert legend(snapshot(truth=truth)).startswith("tension (simulator)")
     estimated = legend(snapshot())  # real vehicles: no truth
     assert estimated.startswith("horizontal pull estimated from tilt")
-    assert "nominal (eq. Th)" in estimated and "rgb(46,204,113)" in estimated  # green: nominal
+    r, g, b = palette.TAUT
+    assert "nominal (eq. Th)" in estimated and f"rgb({r},{g},{b})" in estimated
     partial = SimTruth(t=5.0, ids=VIEW.ids[:2], vehicle_p_ned=((0.0, 0.0, 0.0),) * 2,
                        payload_p_ned=(0.1, 0.2, -0.75), payload_v_ned=(0.3, 0.4, 0.0),
                        rope_tension=(1.2,) * 2)

@@ -72,7 +72,7 @@ def test_the_scene_holds_what_the_frame_says(server: viser.ViserServer) -> None:
     edges = server.scene.get_handle_by_name("/team/edges")
     assert edges.visible and edges.points.shape == (3, 2, 3)  # among known vehicles only
     payload = server.scene.get_handle_by_name("/team/payload")
-    assert payload.visible and payload.color == (240, 190, 140)  # estimated, not measured
+    assert payload.visible and payload.color == tuple(palette.PAYLOAD_ESTIMATED)  # no truth
     nobody = build_frame(VIEW, fleet(1.2, known=0), scale=1.0, truth=None, trails=Trails(4))
     scene.draw(nobody)
     assert not payload.visible and not edges.visible

@@ -3,6 +3,14 @@
 Vehicles are coloured by what they are doing, ropes by how hard they pull and
 formation edges by how far they are from their desired length, so an operator
 reads the team's health at a glance. Every function returns ``uint8`` RGB.
+
+Two colours belong to one thing each: the green of a vehicle that is ok and
+the magenta of the payload. Nothing else in the scene reaches their hues, not
+even part-way along a ramp (edges and ropes go from neutral blue-greys to
+yellow and red), so the team and its payload stand out from the lines
+between them, and a test can find them in a screenshot by colour alone
+(``tests/test_web_browser.py``; the rule itself is tested in
+``tests/test_web_frame.py``).
 """
 
 from __future__ import annotations
@@ -13,12 +21,19 @@ import functools
 import numpy as np
 
 __all__ = [
+    "BAD",
+    "EDGE_OK",
+    "GEOFENCE",
     "GHOST",
+    "OK",
     "PAYLOAD",
     "PAYLOAD_ESTIMATED",
+    "SLACK",
+    "TAUT",
     "TRAIL",
     "UNKNOWN",
     "VELOCITY",
+    "WARN",
     "VehicleState",
     "error_colors",
     "ramp",
@@ -40,24 +55,29 @@ class VehicleState(enum.IntEnum):
         return self.name.lower()
 
 
+OK = (46, 204, 113)
+"""A vehicle that is ok: green, used by nothing else in the scene."""
+
 _STATE_RGB = np.array([
-    (46, 204, 113),  # OK: green
+    OK,
     (149, 165, 166),  # STALE: grey
     (243, 156, 18),  # HOLDING: amber
     (155, 89, 182),  # LANDING: purple
 ], dtype=np.uint8)
 
-PAYLOAD = np.array((230, 126, 34), dtype=np.uint8)  # measured (sim truth): orange
-PAYLOAD_ESTIMATED = np.array((240, 190, 140), dtype=np.uint8)  # from geometry: pale
+PAYLOAD = np.array((214, 0, 150), dtype=np.uint8)  # measured (sim truth): magenta, its own
+PAYLOAD_ESTIMATED = np.array((240, 170, 220), dtype=np.uint8)  # from geometry: pale magenta
 GHOST = np.array((150, 190, 230), dtype=np.uint8)  # desired shape: faint blue
 VELOCITY = np.array((41, 128, 185), dtype=np.uint8)  # velocity arrows: blue
 TRAIL = np.array((52, 73, 94), dtype=np.uint8)  # trails: dark slate
 UNKNOWN = np.array((120, 120, 120), dtype=np.uint8)  # not measured (NaN)
+GEOFENCE = (231, 76, 60)  # the geofence on the ground: red
 
-_GOOD = (46, 204, 113)
-_WARN = (241, 196, 15)
-_BAD = (231, 76, 60)
-_SLACK = (120, 144, 156)
+EDGE_OK = (96, 125, 139)  # an edge at its desired length: neutral blue-grey
+WARN = (241, 196, 15)  # yellow
+BAD = (231, 76, 60)  # red
+SLACK = (207, 216, 220)  # a slack rope: pale
+TAUT = (55, 71, 79)  # a rope at its nominal tension: dark blue-grey, drawn firm
 _LUT_SIZE = 257  # odd: the middle stop of a map is an entry
 
 
@@ -90,10 +110,11 @@ def state_colors(states: np.ndarray) -> np.ndarray:
 
 
 def tension_colors(tension: np.ndarray, nominal: float) -> np.ndarray:
-    """Rope tension, N -> colour: slack grey-blue, nominal green, twice nominal red."""
-    return ramp(np.asarray(tension) / nominal, (0.0, 1.0, 2.0), (_SLACK, _GOOD, _BAD))
+    """Rope tension, N -> colour: slack pale, nominal dark blue-grey, twice nominal red."""
+    return ramp(np.asarray(tension) / nominal, (0.0, 1.0, 2.0), (SLACK, TAUT, BAD))
 
 
 def error_colors(error: np.ndarray, full: float) -> np.ndarray:
-    """Distance error, m -> colour: green at 0, yellow at ``full / 2``, red from ``full``."""
-    return ramp(np.abs(np.asarray(error)) / full, (0.0, 0.5, 1.0), (_GOOD, _WARN, _BAD))
+    """Distance error, m -> colour: neutral blue-grey at 0 (nothing to see), yellow at
+    ``full / 2``, red from ``full``."""
+    return ramp(np.abs(np.asarray(error)) / full, (0.0, 0.5, 1.0), (EDGE_OK, WARN, BAD))

@@ -77,7 +77,7 @@ class SceneView:
         corners = np.array([[g, g, 0.0], [g, -g, 0.0], [-g, -g, 0.0], [-g, g, 0.0]])
         scene.add_line_segments("/ground/geofence",
                                 np.stack((corners, np.roll(corners, -1, axis=0)), axis=1),
-                                (231, 76, 60), thickness=0.02)
+                                palette.GEOFENCE, thickness=0.02)
         vertices, faces = mesh
         self._vehicles = scene.add_batched_meshes_simple(
             "/team/vehicles", vertices, faces, batched_wxyzs=np.tile([1.0, 0, 0, 0], (n, 1)),
