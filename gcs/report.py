@@ -127,7 +127,8 @@ def _formation(log: FlightLog) -> plt.Figure | None:
         return None
     t0 = _t0(log)
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
-    if log.team is not None and "dist_err" in log.arrays and len(log.tick_t):
+    desired_drawn = log.team is not None and "dist_err" in log.arrays and len(log.tick_t) > 0
+    if desired_drawn:
         d = np.asarray(log.team["distances"])
         scale = log.values.get("scale", np.ones(len(log.tick_t)))
         desired = scale[:, None] * d[None, :]
@@ -159,7 +160,8 @@ def _formation(log: FlightLog) -> plt.Figure | None:
     bottom.set_ylabel("velocity [m/s] (x solid, y dotted)")
     bottom.set_xlabel("time [s]")
     bottom.legend(ncol=4, fontsize=7, loc="upper right")
-    fig.suptitle("Distances (desired dashed) and velocities")
+    fig.suptitle("Distances (desired dashed) and velocities" if desired_drawn
+                 else "Distances and velocities")
     fig.tight_layout()
     return fig
 

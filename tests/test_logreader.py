@@ -163,7 +163,13 @@ def test_ardupilot_vehicles_are_placed_in_one_frame(tmp_path: Path, shared_origi
     started), so three vehicles flying 3 m apart all read (0, 0) there: they are placed
     from GLOBAL_POSITION_INT then; with a shared origin, from their local positions."""
     path = ardupilot_log(tmp_path / "ap.tlog", shared_origin=shared_origin)
-    log = FlightLog.load(path)
+    stages: dict[str, list[tuple[int, int]]] = {}
+    log = FlightLog.load(path, progress=lambda stage, done, total:
+                         stages.setdefault(stage, []).append((done, total)))
+    # the tracks' progress: every vehicle message decoded for them, one step per vehicle
+    placed, unplaced = 5 * 60, 3 * 60  # 60 of each type; vehicle 4 sends 3 types of 5
+    total = 3 * placed + unplaced
+    assert stages["tracks"] == [(k * placed, total) for k in (1, 2, 3)] + [(total, total)]
     assert sorted(log.tracks) == [1, 2, 3, 4] and log.ground == {255}
     local = {s: [(m.x, m.y, m.z) for m in raw_messages(path)
                  if m.get_type() == "LOCAL_POSITION_NED" and m.get_srcSystem() == s]

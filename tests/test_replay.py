@@ -469,6 +469,7 @@ def test_an_ardupilot_team_replays_with_a_vehicle_that_sent_no_position(tmp_path
     alone = FlightLog.load(ardupilot_log(tmp_path / "attitude.tlog", shared_origin=False,
                                          placed=()))
     assert sorted(alone.tracks) == [1, 2, 3, 4]
+    assert alone.telemetry_metrics()["duration_s"] == pytest.approx(5.9, abs=1e-3)
     cursor = ReplayCursor(alone)
     assert cursor.end - cursor.start == pytest.approx(5.9, abs=1e-3)  # not 0..0 s
     assert cursor.state(cursor.start + 2.0).fleet.modes == ("GUIDED",) * 4
