@@ -190,14 +190,15 @@ class GcsApp:
         if self.gate.enabled:
             for link in self.links.links.values():
                 link.set_pause(self.gate.pause)
-        self.runtime = Runtime(team, self.links.profiles, self.clock, self.operator,
-                               recorder=self.recorder, analysis=analysis,
-                               truth_source=lambda: self.truth,
-                               setpoints_per_tick=1 if lockstep else None, gate=self.gate)
-        with self._notes_lock:
+        runtime = Runtime(team, self.links.profiles, self.clock, self.operator,
+                          recorder=self.recorder, analysis=analysis,
+                          truth_source=lambda: self.truth,
+                          setpoints_per_tick=1 if lockstep else None, gate=self.gate)
+        with self._notes_lock:  # the notes that came first are shown first
             for level, text in self._early_notes:
-                self.runtime.note(level, text)
+                runtime.note(level, text)
             self._early_notes.clear()
+            self.runtime = runtime
         if self._ack is not None:
             self._echo = _EchoCounter(self.links.links.values())
             self.runtime.add_listener(lambda snap: self._send_ack(snap.fleet.t))

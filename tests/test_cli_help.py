@@ -45,8 +45,8 @@ def test_help_lists_every_command(
 
 
 def test_the_readme_table_names_the_same_commands() -> None:
-    rows = [line for line in Path("README.md").read_text().splitlines()
-            if line.startswith("| `gcs ")]
+    readme = Path(__file__).resolve().parents[1] / "README.md"
+    rows = [line for line in readme.read_text().splitlines() if line.startswith("| `gcs ")]
     assert {row.split()[2] for row in rows} == COMMANDS
 
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import contextlib
 import itertools
+import selectors
 import signal
 import socket
 import subprocess
@@ -43,8 +44,7 @@ def running(*args: str) -> Iterator[tuple[subprocess.Popen[str], str]]:
     proc = subprocess.Popen(sim_command(*args), cwd=ROOT, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
     try:
-        assert proc.stdout is not None
-        line = proc.stdout.readline().strip()
+        line = first_line(proc)
         if not line.startswith("sim ready: "):
             proc.kill()
             _, err = proc.communicate(timeout=10)
@@ -54,6 +54,17 @@ def running(*args: str) -> Iterator[tuple[subprocess.Popen[str], str]]:
         if proc.poll() is None:
             proc.kill()
             proc.communicate(timeout=10)
+
+
+def first_line(proc: subprocess.Popen[str], timeout_s: float = 120.0) -> str:
+    """The process's first line of output, or '' if none comes in time (first runs compile
+    the simulator's kernels)."""
+    assert proc.stdout is not None
+    with selectors.DefaultSelector() as selector:
+        selector.register(proc.stdout, selectors.EVENT_READ)
+        if not selector.select(timeout_s):
+            return ""
+    return proc.stdout.readline().strip()
 
 
 def eventually(condition: Callable[[], bool], what: str, timeout_s: float = 5.0) -> None:
@@ -193,8 +204,7 @@ def test_gcs_sim_hosts_the_team_with_sitl_style_udp_ports_and_stops_on_sigint() 
                              "--udp", "--udp-base-port", str(base), "--udp-gcs-port", "0"],
                             cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
-        assert proc.stdout is not None
-        ready = proc.stdout.readline().strip()
+        ready = first_line(proc)
         assert ready.startswith("sim ready: ") and f"2=127.0.0.1:{base + 1}" in ready, ready
         client = mavutil.mavlink_connection(f"udpout:127.0.0.1:{base + 1}", source_system=200,
                                             source_component=190)

@@ -432,7 +432,8 @@ def test_a_retried_command_is_answered_again_but_carried_out_once() -> None:
     b = bench()
     b.run(0.05)
     b.command(ARM, 1)
-    takeoff = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.4]  # below the taut rope (about 0.87 m)
+    # below the taut rope (about 0.87 m); NaN yaw, as QGC and MAVSDK send it
+    takeoff = [0.0, 0.0, 0.0, float("nan"), 0.0, 0.0, 0.4]
     b.send(b.gcs.mav.command_long_encode(SYSID, 1, TAKEOFF, 0, *takeoff))
     b.run(1.0)  # climbing: about 0.3 m up
     b.send(b.gcs.mav.command_long_encode(SYSID, 1, TAKEOFF, 1, *takeoff))  # ack was "lost"

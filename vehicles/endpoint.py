@@ -37,6 +37,7 @@ through the ``send`` callable, which must be thread-safe.
 
 from __future__ import annotations
 
+import struct
 import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -65,8 +66,9 @@ _STATUSTEXT_LEN = 50
 _REFUSAL_REPORT_PERIOD = 1.0
 """At most one STATUSTEXT per refusal reason per this much sim time, s (all are counted)."""
 
-_RETRY_WINDOW_S = 5.0
-"""A command resent (confirmation > 0) this soon after the same one is a retry, sim s."""
+_PARAMS = struct.Struct("<7f")
+"""COMMAND_LONG's seven parameters as sent (float32)."""
+
 
 
 @dataclass(frozen=True)
@@ -137,8 +139,9 @@ class VehicleEndpoint:
         self._commands = 0
         self._accepted = 0
         self._refused = 0
-        self._last_command: tuple[tuple[object, ...], float, CommandOutcome] | None = None
-        """The last COMMAND_LONG carried out: its key, sim time and outcome (loop thread)."""
+        self._last_command: tuple[tuple[object, ...], CommandOutcome] | None = None
+        """The last COMMAND_LONG carried out: sender, command, parameters and outcome (loop
+        thread); a retry is recognised against it alone, however late it comes."""
         self._handlers: dict[str, Callable[[MavMessage, float], None]] = {
             "COMMAND_LONG": self._command_long,
             "COMMAND_INT": self._command_int,
@@ -214,16 +217,17 @@ class VehicleEndpoint:
     def _command_long(self, msg: MavMessage, t: float) -> None:
         with self._rx_lock:
             self._commands += 1
-        key = (msg.get_srcSystem(), msg.get_srcComponent(), msg.command, msg.param1,
-               msg.param2, msg.param3, msg.param4, msg.param5, msg.param6, msg.param7)
+        # parameters compared bit for bit: NaN (QGC's and MAVSDK's "unset") equals itself
+        key = (msg.get_srcSystem(), msg.get_srcComponent(), msg.command, _PARAMS.pack(
+            msg.param1, msg.param2, msg.param3, msg.param4, msg.param5, msg.param6,
+            msg.param7))
         last = self._last_command
         if (msg.confirmation > 0 and last is not None and last[0] == key
-                and t - last[1] <= _RETRY_WINDOW_S
-                and last[2].result is not MavResult.TEMPORARILY_REJECTED):
-            outcome = last[2]  # a retry whose first copy was carried out: the same answer
+                and last[1].result is not MavResult.TEMPORARILY_REJECTED):
+            outcome = last[1]  # a retry whose first copy was carried out: the same answer
         else:
             outcome = execute_command(msg, self._autopilot, self._index, self._streams, t)
-            self._last_command = (key, t, outcome)
+            self._last_command = (key, outcome)
             if outcome.result is not MavResult.ACCEPTED and outcome.reason:
                 self._status_text(Severity.WARNING, outcome.reason)
         self._ack(msg, outcome.result)

@@ -19,6 +19,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence
+from types import MappingProxyType
 
 from gcs.link.decoder import DecodeStats, FrameDecoder
 from gcs.link.dialect import MavMessage, mavlink, message_id
@@ -34,13 +35,15 @@ __all__ = ["DEFAULT_TELEMETRY_RATES_HZ", "Link"]
 
 _log = logging.getLogger(__name__)
 
-DEFAULT_TELEMETRY_RATES_HZ: Mapping[str, float] = {
+DEFAULT_TELEMETRY_RATES_HZ: Mapping[str, float] = MappingProxyType({
     "LOCAL_POSITION_NED": 20.0,
     "ATTITUDE": 20.0,
-    "HIGHRES_IMU": 10.0,
     "SYS_STATUS": 1.0,
-}
-"""Message rates the GCS asks for by default (the guidance runs at 4 Hz)."""
+})
+"""What the GCS reads from a real autopilot, Hz, and asks it for when first heard
+(:meth:`Link.request_telemetry`): position and velocity for the guidance (five samples per
+4 Hz tick) and ArduPilot's vertical loop, attitude for tilt and the rope pull estimate,
+SYS_STATUS for the battery. Nothing more: a telemetry radio's bandwidth is shared."""
 
 
 class _PendingCommand:
@@ -136,6 +139,11 @@ class Link:
                                              name=f"link-{self._sysid}-service")
             self._service.start()
         return self
+
+    @property
+    def closed(self) -> bool:
+        """Whether :meth:`close` was called."""
+        return self._stop.is_set()
 
     def close(self) -> None:
         """Stop background work and close the transport; idempotent."""
@@ -364,17 +372,20 @@ class Link:
                     self._pending = None
 
     def set_message_interval(self, message: str | int, *, rate_hz: float,
-                             timeout_s: float | None = None) -> CommandAck:
+                             timeout_s: float | None = None,
+                             retries: int | None = None) -> CommandAck:
         """Ask for ``message`` (name or id) at ``rate_hz`` (0: stop) by SET_MESSAGE_INTERVAL."""
         msg_id = message_id(message) if isinstance(message, str) else int(message)
         if rate_hz < 0:
             raise ValueError(f"rate_hz must be >= 0, got {rate_hz}")
         interval_us = -1.0 if rate_hz == 0 else 1e6 / rate_hz
         return self.command_long(mavlink.MAV_CMD_SET_MESSAGE_INTERVAL,
-                                 (float(msg_id), interval_us), timeout_s=timeout_s)
+                                 (float(msg_id), interval_us), timeout_s=timeout_s,
+                                 retries=retries)
 
     def request_telemetry(self, rates_hz: Mapping[str, float] = DEFAULT_TELEMETRY_RATES_HZ, *,
-                          timeout_s: float | None = None) -> dict[str, CommandResult]:
+                          timeout_s: float | None = None,
+                          retries: int | None = None) -> dict[str, CommandResult]:
         """Set several message rates; returns each message's result instead of raising.
 
         Autopilots do not all stream every message (ArduPilot has no
@@ -384,7 +395,8 @@ class Link:
         for name, rate in rates_hz.items():
             try:
                 results[name] = self.set_message_interval(name, rate_hz=rate,
-                                                          timeout_s=timeout_s).result
+                                                          timeout_s=timeout_s,
+                                                          retries=retries).result
             except CommandError as exc:
                 results[name] = exc.result
         return results

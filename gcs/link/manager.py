@@ -4,7 +4,8 @@
 autopilot profile per configured vehicle, shares one zenoh session among the
 zenoh links, and feeds :class:`~gcs.link.discovery.Discovery` from zenoh
 liveliness tokens and from the links' heartbeats. A vehicle heard for the
-first time is prepared by its profile on a thread of its own (the telemetry
+first time (and again after it vanished: a rebooted autopilot forgets) is
+prepared by its profile on a thread of its own (the telemetry
 rates a real autopilot is asked for, :meth:`AutopilotProfile.prepare`); what
 it refuses is reported through ``on_note``.
 """
@@ -190,7 +191,9 @@ class LinkManager:
                     link.service(now)
                     alive = link.health.alive
                     self.discovery.report(sysid, alive, PresenceSource.HEARTBEAT)
-                    if alive and sysid not in self._prepared:
+                    if not alive:  # a rebooted autopilot forgets the rates it was asked for
+                        self._prepared.discard(sysid)
+                    elif sysid not in self._prepared:
                         self._prepared.add(sysid)
                         threading.Thread(target=self._prepare, args=(sysid,), daemon=True,
                                          name=f"link-prepare-{sysid}").start()
@@ -203,12 +206,13 @@ class LinkManager:
         try:
             results = self._profiles[sysid].prepare()
         except LinkError as exc:
-            self._note("warning", f"{exc}: telemetry rates not set")
+            if not self._links[sysid].closed:  # closing mid-request is no news
+                self._note("warning", f"{exc}: telemetry rates not set")
             return
         refused = [f"{name} ({result.name})" for name, result in results.items()
                    if result is not CommandResult.ACCEPTED]
         if refused:
-            self._note("warning", f"vehicle {sysid}: telemetry rate refused for "
+            self._note("warning", f"vehicle {sysid}: telemetry rate not set for "
                                   f"{', '.join(refused)}: streamed at the autopilot's own rate")
         elif results:
             self._note("info", f"vehicle {sysid}: telemetry rates set for {', '.join(results)}")

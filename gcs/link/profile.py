@@ -22,16 +22,11 @@ from gcs.link.modes import CUSTOM_MODE_ENABLED
 from gcs.link.setpoints import SetpointKind
 from gcs.link.telemetry import Heartbeat, LocalPosition, Telemetry
 
-__all__ = ["FLIGHT_TELEMETRY_RATES_HZ", "AutopilotProfile", "ProfileBase", "ProfileName"]
+__all__ = ["AutopilotProfile", "ProfileBase", "ProfileName"]
 
-FLIGHT_TELEMETRY_RATES_HZ: Mapping[str, float] = MappingProxyType({
-    "LOCAL_POSITION_NED": 20.0,
-    "ATTITUDE": 20.0,
-    "SYS_STATUS": 1.0,
-})
-"""What the GCS reads from a real autopilot, Hz: position and velocity for the guidance (five
-samples per 4 Hz tick) and ArduPilot's vertical loop, attitude for tilt and the rope pull
-estimate, SYS_STATUS for the battery. Nothing more: a telemetry radio's bandwidth is shared."""
+PREPARE_TIMEOUT_S = 0.5
+"""Wait for each telemetry request's ack, s, one attempt: a vehicle that does not answer must
+not hold the link's command lock (arm, take-off, an abort's land) for long."""
 
 
 class ProfileName(Enum):
@@ -163,10 +158,12 @@ class ProfileBase:
             self._link.send_setpoint(accel_xy_ned=accel_xy_ned, z_ned=vertical)
 
     def prepare(self) -> dict[str, CommandResult]:
-        """Ask for :attr:`telemetry_rates_hz`; each message's result (see the protocol)."""
+        """Ask for :attr:`telemetry_rates_hz`, one quick attempt each; each message's result
+        (see the protocol)."""
         if not self.telemetry_rates_hz:
             return {}
-        return self._link.request_telemetry(self.telemetry_rates_hz)
+        return self._link.request_telemetry(self.telemetry_rates_hz,
+                                            timeout_s=PREPARE_TIMEOUT_S, retries=0)
 
     def mode_text(self, heartbeat: Heartbeat | None = None) -> str:
         """Flight mode of ``heartbeat`` (default: the latest), readable; ``"unknown"`` if none.

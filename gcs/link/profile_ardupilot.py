@@ -25,11 +25,11 @@ from dataclasses import dataclass
 
 from gcs.link.dialect import mavlink
 from gcs.link.errors import LinkError
-from gcs.link.link import Link
+from gcs.link.link import DEFAULT_TELEMETRY_RATES_HZ, Link
 from gcs.link.modes import CopterMode, copter_mode_text
-from gcs.link.profile import FLIGHT_TELEMETRY_RATES_HZ, ProfileBase, ProfileName
+from gcs.link.profile import ProfileBase, ProfileName
 from gcs.link.setpoints import SETPOINT_MESSAGE, SetpointKind
-from gcs.link.telemetry import LocalPosition, Record
+from gcs.link.telemetry import Heartbeat, LocalPosition, Record
 from gcs.link.transport import FrameDirection
 from gcs.link.unpack import unpack_v2
 from gcs.typed_config import field
@@ -69,7 +69,7 @@ class ArduPilotProfile(ProfileBase):
     streaming_mode = CopterMode.GUIDED.name
     landing_modes = frozenset(m.name for m in (CopterMode.LAND, CopterMode.RTL,
                                                CopterMode.SMART_RTL))
-    telemetry_rates_hz = FLIGHT_TELEMETRY_RATES_HZ
+    telemetry_rates_hz = DEFAULT_TELEMETRY_RATES_HZ
 
     def __init__(self, link: Link, *, confirm_timeout_s: float = 3.0,
                  vertical: VerticalPd | None = None, max_position_age_s: float = 0.5,
@@ -86,6 +86,7 @@ class ArduPilotProfile(ProfileBase):
         self._z_ref: float | None = None  # the caller's latest altitude target, m (NED)
         self._z_ref_at = -math.inf  # link clock time of that target
         self._accel_xy = (0.0, 0.0)  # horizontal acceleration last sent, m/s^2
+        self._guided = False  # whether the latest HEARTBEAT shows GUIDED
         link.add_frame_listener(self._on_frame)
         link.add_record_listener(self._on_record)
 
@@ -129,8 +130,9 @@ class ArduPilotProfile(ProfileBase):
         position = self._position(max_age_s=self.max_position_age_s)
         az = self.vertical.accel_down(z_ref_ned=z_ned, z_ned=position.p_ned[2],
                                       vz_ned=position.v_ned[2])
+        now = self.link.clock()
         with self._lock:
-            self._z_ref, self._z_ref_at = z_ned, self.link.clock()
+            self._z_ref, self._z_ref_at = z_ned, now
         return az
 
     def _on_frame(self, direction: FrameDirection, frame: bytes) -> None:
@@ -149,16 +151,17 @@ class ArduPilotProfile(ProfileBase):
     def _on_record(self, record: Record) -> None:
         """A new position while the GCS streams: a setpoint with ``afz`` from it (receive
         thread)."""
+        if isinstance(record, Heartbeat):
+            self._guided = record.custom_mode == CopterMode.GUIDED
+            return
         if not isinstance(record, LocalPosition):
             return
         with self._lock:
             z_ref, accel_xy = self._z_ref, self._accel_xy
             fresh = record.received_at - self._z_ref_at <= self.follow_s
-        if z_ref is None or not fresh:
+        # GUIDED flies setpoints; in LAND or RTL they would be refused
+        if z_ref is None or not fresh or not self._guided:
             return
-        hb = self.link.telemetry.heartbeat
-        if hb is None or hb.custom_mode != CopterMode.GUIDED:
-            return  # GUIDED flies setpoints; in LAND or RTL they would be refused
         try:
             az = self.vertical.accel_down(z_ref_ned=z_ref, z_ned=record.p_ned[2],
                                           vz_ned=record.v_ned[2])

@@ -20,9 +20,9 @@ import time
 
 from gcs.link.dialect import mavlink
 from gcs.link.errors import LinkError
-from gcs.link.link import Link
+from gcs.link.link import DEFAULT_TELEMETRY_RATES_HZ, Link
 from gcs.link.modes import Px4AutoSubMode, Px4MainMode, px4_mode_text, split_px4_custom_mode
-from gcs.link.profile import FLIGHT_TELEMETRY_RATES_HZ, ProfileBase, ProfileName
+from gcs.link.profile import ProfileBase, ProfileName
 from gcs.link.setpoints import SetpointKind
 from gcs.link.telemetry import Heartbeat
 
@@ -69,7 +69,7 @@ class Px4Profile(ProfileBase):
     landing_modes = frozenset(f"AUTO.{m.name}" for m in (Px4AutoSubMode.LAND,
                                                         Px4AutoSubMode.RTL,
                                                         Px4AutoSubMode.PRECLAND))
-    telemetry_rates_hz = FLIGHT_TELEMETRY_RATES_HZ
+    telemetry_rates_hz = DEFAULT_TELEMETRY_RATES_HZ
 
     def __init__(self, link: Link, *, confirm_timeout_s: float = 3.0, warmup_s: float = 1.2,
                  stream_rate_hz: float = 10.0, handover_s: float = 5.0) -> None:
