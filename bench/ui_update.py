@@ -181,7 +181,8 @@ def received_rate(team: Team, *, seconds: float = SECONDS) -> dict[str, float]:
             ui.start()
             watch = subprocess.run(
                 [sys.executable, "-m", "web.wireviewer", str(ui.server.get_port()),
-                 "--warmup", str(WARMUP_S), "--seconds", str(seconds)],
+                 "--node", "/team/vehicles", "--warmup", str(WARMUP_S),
+                 "--seconds", str(seconds)],
                 cwd=ROOT, capture_output=True, text=True, timeout=WARMUP_S + seconds + 60.0,
                 check=True)
             page = ui.stats()

@@ -15,7 +15,15 @@ from web.browser_input import (
     InputTracker,
     parse_input,
 )
-from web.browser_script import CHANNEL_LABEL, SEND_PERIOD_MS, pads_html, script_source
+from web.browser_script import (
+    ABORT_HOTKEY,
+    ABORT_MODIFIER,
+    CHANNEL_LABEL,
+    SEND_PERIOD_MS,
+    abort_keys,
+    pads_html,
+    script_source,
+)
 from web.control import ControlLock
 
 
@@ -89,9 +97,15 @@ def test_reset_lets_go_but_keeps_the_counts() -> None:
 def test_the_script_is_configured_from_the_python_tables() -> None:
     source = script_source()
     config = json.loads(re.search(r"const CFG = (\{.*?\});", source).group(1))  # type: ignore[union-attr]
+    abort = config.pop("abort")
     assert config == {"channel": CHANNEL_LABEL, "keys": dict(HOTKEYS),
                       "steps": list(STEP_ACTIONS), "period": SEND_PERIOD_MS,
                       "linger": int(INPUT_TIMEOUT * 1000)}
+    # the overlay presses the abort command's own hotkey: Ctrl+Shift+X, as registered
+    assert (abort["key"], abort["ctrl"], abort["shift"], abort["alt"]) == (
+        ABORT_HOTKEY, True, True, False)
+    assert ABORT_MODIFIER == "cmd/ctrl+shift" and abort_keys() == "Ctrl+Shift+X"
+    assert abort_keys() in abort["title"]
     # the line the script writes is the one the server reads
     assert '"#" + st.seq + " keys=" +' in source and '" pad=" +' in source
 

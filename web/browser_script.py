@@ -5,10 +5,23 @@ specials: no ``+``/``-``, no key-up, so no "hold W to fly forward") and
 buttons with ``on_hold``, but no joystick. This script adds both:
 
 * hotkeys (:data:`web.browser_input.HOTKEYS`) tracked down *and* up, ignored
-  while typing in a field or with Ctrl/Alt/Cmd held; released on window blur;
+  while typing in a text field (not after clicking a checkbox or a button) or
+  with Ctrl/Alt/Cmd held; released on window blur;
 * two virtual sticks drawn by :data:`PADS_HTML` (a round pad for translation,
   a bar for rotation) that follow the pointer and spring back to the centre
   on release.
+
+It also draws the **always-visible abort**: a fixed button over the page,
+above every panel, that no panel's collapse or scroll can hide. It aborts
+through viser's command hotkey (``ABORT_HOTKEY`` with ``ABORT_MODIFIER``,
+Ctrl+Shift+X), registered for every viewer by :class:`web.ui.WebUi`: the
+button dispatches that key press, viser's page sends the command over its
+websocket, and the server runs the same abort as the panel's ABORT button
+for the viewer it came from (any viewer may abort). A key press rather than
+a GUI message because viser's page keeps no handle to send one through once
+the control panel is collapsed (its content leaves the page); the hotkey
+listener is the page's own, whatever its layout. Pressed on a keyboard, the
+same keys abort too.
 
 It reports through the holder's read-only "browser input" text field, whose
 input it sets the way a user's typing would (native value setter plus an
@@ -26,19 +39,38 @@ persistent messages, so viewers connecting later get it too.
 from __future__ import annotations
 
 import json
+from typing import Literal
 
 import viser
 from viser import _messages as viser_messages
 
 from web.browser_input import HOTKEYS, INPUT_TIMEOUT, STEP_ACTIONS
 
-__all__ = ["CHANNEL_LABEL", "SEND_PERIOD_MS", "install_script", "pads_html", "script_source"]
+__all__ = [
+    "ABORT_HOTKEY",
+    "ABORT_LABEL",
+    "ABORT_MODIFIER",
+    "CHANNEL_LABEL",
+    "SEND_PERIOD_MS",
+    "abort_keys",
+    "install_script",
+    "pads_html",
+    "script_source",
+]
 
 CHANNEL_LABEL = "browser input"
 """Label of the text field the script writes to (matched exactly by the script)."""
 
 SEND_PERIOD_MS = 100
 """At most one line per this period; repeated at this period while anything is held."""
+
+ABORT_LABEL = "ABORT: hold, then land"
+"""The abort's name, on the panel's button and in viser's command palette."""
+
+ABORT_HOTKEY: Literal["X"] = "X"
+ABORT_MODIFIER: Literal["cmd/ctrl+shift"] = "cmd/ctrl+shift"
+"""The abort's key (viser command hotkey): Ctrl+Shift+X (Cmd+Shift+X on a Mac); the
+overlay button presses it. Modifiers, so that no stray key aborts a flight."""
 
 _SCRIPT = r"""
 (() => {
@@ -86,7 +118,9 @@ _SCRIPT = r"""
     if (active || Date.now() - st.changedAt < CFG.linger) schedule();
   }, CFG.period);
 
-  const editable = (t) => t && (t.isContentEditable || /^(INPUT|TEXTAREA|SELECT)$/.test(t.tagName));
+  // typing fields keep their keys; a focused checkbox or button (just clicked) does not
+  const editable = (t) => t && (t.isContentEditable || /^(TEXTAREA|SELECT)$/.test(t.tagName) ||
+    (t.tagName === "INPUT" && /^(text|search|number|email|password|tel|url)$/.test(t.type)));
   const keyName = (e) => (e.key.length === 1 ? e.key.toLowerCase() : e.key);
   window.addEventListener("keydown", (e) => {
     if (editable(e.target) || e.ctrlKey || e.metaKey || e.altKey) return;
@@ -169,6 +203,27 @@ _SCRIPT = r"""
   }
   window.addEventListener("blur", letGo);
   document.addEventListener("visibilitychange", () => { if (document.hidden) letGo(); });
+
+  // the always-visible abort: presses the abort command's hotkey (viser's listener)
+  const abort = document.createElement("button");
+  abort.type = "button";
+  abort.dataset.gcs = "abort";
+  abort.textContent = CFG.abort.text;
+  abort.title = CFG.abort.title;
+  abort.setAttribute("aria-label", CFG.abort.aria);
+  abort.style.cssText = CFG.abort.style;
+  abort.addEventListener("click", () => {
+    const key = {key: CFG.abort.key, code: "Key" + CFG.abort.key, ctrlKey: CFG.abort.ctrl,
+                 shiftKey: CFG.abort.shift, altKey: CFG.abort.alt, bubbles: true,
+                 cancelable: true};
+    document.body.dispatchEvent(new KeyboardEvent("keydown", key));
+    document.body.dispatchEvent(new KeyboardEvent("keyup", key));
+    abort.blur();  // Space or Enter later must not press it again
+    abort.textContent = CFG.abort.sent;
+    clearTimeout(abort.gcsTimer);
+    abort.gcsTimer = setTimeout(() => { abort.textContent = CFG.abort.text; }, 1500);
+  });
+  document.body.appendChild(abort);
 })();
 """
 
@@ -203,14 +258,35 @@ def pads_html(*, enabled: bool) -> str:
     )
 
 
+_ABORT_STYLE = (
+    "position:fixed;left:50%;bottom:16px;transform:translateX(-50%);z-index:2147483000;"
+    "min-width:132px;padding:10px 22px;border:3px solid #fff;border-radius:10px;"
+    "background:#e03131;color:#fff;font:700 18px/1 sans-serif;letter-spacing:1px;"
+    "box-shadow:0 2px 10px rgba(0,0,0,0.45);cursor:pointer;touch-action:manipulation;")
+
+
+def abort_keys() -> str:
+    """The abort's keys as a person reads them, e.g. ``Ctrl+Shift+X``."""
+    names = {"cmd/ctrl": "Ctrl", "shift": "Shift", "alt": "Alt"}
+    return "+".join([*(names[m] for m in ABORT_MODIFIER.split("+")), ABORT_HOTKEY])
+
+
 def script_source() -> str:
-    """The script with its configuration (keys, actions, timing) filled in."""
+    """The script with its configuration (keys, actions, timing, the abort) filled in."""
+    modifiers = ABORT_MODIFIER.split("+")
     config = {
         "channel": CHANNEL_LABEL,
         "keys": dict(HOTKEYS),
         "steps": list(STEP_ACTIONS),
         "period": SEND_PERIOD_MS,
         "linger": int(INPUT_TIMEOUT * 1000),
+        "abort": {"key": ABORT_HOTKEY, "ctrl": "cmd/ctrl" in modifiers,
+                  "shift": "shift" in modifiers, "alt": "alt" in modifiers,
+                  "text": "ABORT", "sent": "ABORT sent",
+                  "aria": "ABORT (always shown): hold, then land",
+                  "title": "Abort: the team stops, holds, then lands. Any viewer may; "
+                           f"{abort_keys()} does the same.",
+                  "style": _ABORT_STYLE},
     }
     return _SCRIPT.replace("__CONFIG__", json.dumps(config))
 

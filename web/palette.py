@@ -55,7 +55,7 @@ class VehicleState(enum.IntEnum):
         return self.name.lower()
 
 
-OK = (46, 204, 113)
+OK = (0, 200, 83)
 """A vehicle that is ok: green, used by nothing else in the scene."""
 
 _STATE_RGB = np.array([

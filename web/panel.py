@@ -19,7 +19,7 @@ from gcs.phases import Action
 from gcs.runtime import RuntimeSnapshot
 from web.actions import OperatorActions
 from web.browser_input import InputTracker, parse_input
-from web.browser_script import CHANNEL_LABEL, pads_html
+from web.browser_script import ABORT_LABEL, CHANNEL_LABEL, pads_html
 from web.control import ControlLock
 
 __all__ = ["FOLLOW_STEP", "HOTKEY_HELP", "PHASE_BUTTONS", "ControlPanel"]
@@ -82,9 +82,9 @@ class ControlPanel:
         self._refreshing = threading.Lock()  # viewers come and go on viser's threads
         gui = client.gui
         self._banner = gui.add_markdown("", order=0)
-        self._abort = gui.add_button("ABORT: hold, then land", color="red",
-                                     icon=viser.Icon.ALERT_OCTAGON, order=1,
-                                     hint="Any viewer may abort: the team stops, holds, lands.")
+        self._abort = gui.add_button(ABORT_LABEL, color="red", icon=viser.Icon.ALERT_OCTAGON,
+                                     order=1, hint="Any viewer may abort: the team stops, "
+                                                   "holds, lands.")
         self._take = gui.add_button("Take control", icon=viser.Icon.STEERING_WHEEL, order=2)
         with gui.add_folder("Fly", order=3) as fly:
             self._pads = gui.add_html(pads_html(enabled=False), order=0)
@@ -187,12 +187,16 @@ class ControlPanel:
     def _notify(self, title: str, body: str) -> None:
         self.client.add_notification(title, body, color="red", auto_close_seconds=6.0)
 
-    def _on_abort(self, event: viser.GuiEvent) -> None:
-        if event.client_id != self.id:
-            return
+    def abort(self) -> None:
+        """This viewer asked to abort (its panel's button, the overlay, the hotkey): any
+        viewer may, control or not; told why if the phase refuses."""
         why = self._actions.request(Action.ABORT)
         if why is not None:
             self._notify("Abort refused", why)
+
+    def _on_abort(self, event: viser.GuiEvent) -> None:
+        if event.client_id == self.id:
+            self.abort()
 
     def _on_take(self, event: viser.GuiEvent) -> None:
         if event.client_id != self.id:

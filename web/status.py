@@ -25,7 +25,10 @@ __all__ = ["UiStats", "events_html", "rope_legend", "rope_pull_estimate", "summa
            "vehicle_table_html", "vehicles_html"]
 
 _LEVEL_COLOR = {"info": "#455a64", "warning": "#e67e22", "error": "#c0392b"}
-_CELL = "padding:1px 5px;text-align:right;white-space:nowrap"
+_CELL = "padding:1px 4px;text-align:right;white-space:nowrap"
+_HEAD = "padding:1px 4px;text-align:right;font-weight:500;color:#607d8b;vertical-align:bottom"
+"""Header cells may wrap ("batt" over "%"): the table then fits the 470 px status panel,
+its last column (rtt) included, without scrolling sideways."""
 
 
 @dataclass(frozen=True)
@@ -168,9 +171,8 @@ def vehicle_table_html(f: FleetState, *, stale_after: float, rope: np.ndarray, r
         )
         rows.append(f'<tr data-gcs="vehicle-{vid}">' +
                     "".join(f'<td style="{_CELL}">{c}</td>' for c in cells) + "</tr>")
-    header = "".join(f'<th style="{_CELL};font-weight:500;color:#607d8b">{h}</th>'
-                     for h in head)
-    return ('<div style="overflow-x:auto;padding:0 4px">'
+    header = "".join(f'<th style="{_HEAD}">{h}</th>' for h in head)
+    return ('<div data-gcs="vehicles" style="overflow-x:auto;padding:0 4px">'
             '<table style="border-collapse:collapse;font-size:0.8em">'
             f'<tr>{header}</tr>{"".join(rows)}</table></div>')
 

@@ -8,7 +8,9 @@ loop's snapshots. The holder's sticks are written to the operator command
 from this thread too (refreshed while deflected, one zero on release), so the
 browser is one more input source beside the gamepad and scripts.
 
-Layout of the page: the 3-D scene in the middle; the control panel on the
+Layout of the page: the 3-D scene in the middle, under a red ABORT button
+that no panel can hide (the page script's; it presses the abort command's
+hotkey, Ctrl+Shift+X); the control panel on the
 right has, per viewer, the control banner, ABORT, take/release control, the
 "Fly" folder (virtual sticks, scale, altitude, guidance, phase buttons) and
 "View"; a panel on the left, shared by all viewers, has the tabs "Status"
@@ -28,9 +30,10 @@ import numpy as np
 import viser
 
 from gcs.app import GcsApp
+from gcs.phases import Action
 from gcs.runtime import RuntimeSnapshot
 from web.actions import OperatorActions
-from web.browser_script import install_script
+from web.browser_script import ABORT_HOTKEY, ABORT_LABEL, ABORT_MODIFIER, install_script
 from web.control import ControlLock
 from web.frame import TeamView, build_frame
 from web.history import History
@@ -78,6 +81,10 @@ class WebUi:
         server = self.server
         server.gui.configure_theme(control_width="large", show_share_button=False)
         server.gui.main_panel.dock_right()
+        abort = server.gui.add_command(ABORT_LABEL, hotkey=ABORT_HOTKEY, modifier=ABORT_MODIFIER,
+                                       icon=viser.Icon.ALERT_OCTAGON,
+                                       description="any viewer: the team stops, holds, lands")
+        abort.on_trigger(self._on_abort)
         install_script(server)
         self._scene = SceneView(server.scene, self._view,
                                 quad_mesh(cfg.airframe.arm_x, cfg.airframe.arm_y),
@@ -160,6 +167,15 @@ class WebUi:
             panel = self._panels.pop(client.client_id, None)
         if panel is not None and panel.close():
             self._refresh_panels()
+
+    def _on_abort(self, event: viser.CommandEvent) -> None:
+        """The abort command (the overlay button, the hotkey): as the viewer's panel's."""
+        with self._panels_lock:
+            panel = self._panels.get(event.client_id) if event.client_id is not None else None
+        if panel is not None:
+            panel.abort()
+        else:  # a viewer whose panel is not built yet still aborts
+            self._actions.request(Action.ABORT)
 
     def _refresh_panels(self) -> None:
         for panel in self._panel_list():

@@ -131,10 +131,21 @@ class SceneRecord:
             node = self._nodes.get(name)
             return None if node is None else dict(node)
 
-    def rate(self, name: str, *, since: float) -> float:
-        """Windows per second that changed node ``name`` since monotonic time ``since``."""
+    def _times(self, name: str) -> list[float]:
+        """Arrival times of the windows that changed node ``name`` or a node under it."""
+        under = name.rstrip("/") + "/"
         with self._lock:
-            times = [t for t, names in self._arrivals if t >= since and name in names]
+            return [t for t, names in self._arrivals
+                    if name in names or any(n.startswith(under) for n in names)]
+
+    def updates(self, name: str) -> int:
+        """How many windows so far changed node ``name`` or a node under it."""
+        return len(self._times(name))
+
+    def rate(self, name: str, *, since: float) -> float:
+        """Windows per second that changed node ``name`` (or a node under it) since
+        monotonic time ``since``."""
+        times = [t for t in self._times(name) if t >= since]
         if len(times) < 2:
             return 0.0
         return (len(times) - 1) / (times[-1] - times[0])
@@ -202,8 +213,9 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=main.__doc__)
     parser.add_argument("port", type=int, help="the page's port")
     parser.add_argument("--host", default="127.0.0.1")
-    parser.add_argument("--node", default="/team/vehicles",
-                        help="scene node whose updates are counted (default /team/vehicles)")
+    parser.add_argument("--node", default="/team",
+                        help="scene node whose updates (its own or under it) are counted "
+                             "(default /team: the team's frames)")
     parser.add_argument("--warmup", type=float, default=1.0, metavar="S",
                         help="seconds connected before counting (the page's backlog)")
     parser.add_argument("--seconds", type=float, default=5.0, metavar="S",
