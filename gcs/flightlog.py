@@ -11,11 +11,12 @@ header, else its ``phase`` values from a system that reports no position);
 systems whose HEARTBEAT says ``MAV_TYPE_GCS`` are ground stations too. Neither
 becomes a vehicle, and neither counts in the link losses. Every other system
 with an autopilot component is a vehicle, whether or not its positions were
-logged (see :func:`_read_tracks` for where each one is placed).
+logged (see :func:`_team_frame` for where each one is placed).
 """
 
 from __future__ import annotations
 
+import math
 from collections import defaultdict
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -93,6 +94,8 @@ class FlightLog:
     missing: list[str] = field(default_factory=list)
     origin: tuple[float, float, float] | None = None  # lat, lon (deg), alt (m) of NED zero
     origin_spread: float = 0.0  # m, how far apart the vehicles' local origins are
+    from_global: tuple[int, ...] = ()  # vehicles placed from GLOBAL_POSITION_INT
+    own_frame: tuple[int, ...] = ()  # vehicles with local positions only, left unplaced
 
     @classmethod
     def load(cls, path: str | Path,
@@ -106,11 +109,12 @@ class FlightLog:
         team = None
         if gcs_sysid is not None:
             team = _read_internals(index, gcs_sysid, ticks, progress)
-        tracks, origin, spread = _read_tracks(index, ground, progress)
+        tracks, frame = _read_tracks(index, ground, progress)
         texts = _read_texts(index)
         log = cls(index=index, gcs_sysid=gcs_sysid, ground=frozenset(ground), team=team,
                   tick_t=np.zeros(0), phase=np.zeros(0, dtype=int), values={}, arrays={},
-                  tracks=tracks, texts=texts, origin=origin, origin_spread=spread)
+                  tracks=tracks, texts=texts, origin=frame.origin, origin_spread=frame.spread,
+                  from_global=frame.from_global, own_frame=frame.own_frame)
         log._assemble(ticks)
         return log
 
@@ -147,18 +151,29 @@ class FlightLog:
             self.missing.append("team header (edges and desired distances)")
         if "payload" not in self.arrays:
             self.missing.append("payload and rope truth (only recorded in simulation)")
-        unplaced = [s for s, tr in sorted(self.tracks.items()) if not len(tr.t)]
+        unplaced = [s for s, tr in sorted(self.tracks.items())
+                    if not len(tr.t) and s not in self.own_frame]
         if not self.tracks or unplaced:
-            whose = f" from vehicle {', '.join(map(str, unplaced))}" if unplaced else ""
-            self.missing.append(f"vehicle positions{whose} (no LOCAL_POSITION_NED or "
-                                "GLOBAL_POSITION_INT)")
+            self.missing.append(f"vehicle positions{_whose(unplaced)} (no LOCAL_POSITION_NED "
+                                "or GLOBAL_POSITION_INT)")
         if self.origin is not None:
             lat, lon, alt = self.origin
-            why = ("a shared local frame (the vehicles' LOCAL_POSITION_NED origins differ by "
-                   f"up to {self.origin_spread:.1f} m)"
-                   if self.origin_spread > ORIGIN_TOLERANCE_M else "local positions")
+            if self.origin_spread > ORIGIN_TOLERANCE_M:
+                why = ("a shared local frame (the vehicles' LOCAL_POSITION_NED origins differ "
+                       f"by up to {self.origin_spread:.1f} m)")
+            elif self.own_frame:
+                why = ("a shared local frame (no vehicle sent both LOCAL_POSITION_NED and "
+                       "GLOBAL_POSITION_INT, to tie the two)")
+            elif {s for s, tr in self.tracks.items() if len(tr.t)} <= set(self.from_global):
+                why = "local positions"
+            else:
+                why = f"local positions{_whose(self.from_global)} (about the others' local origin)"
             self.missing.append(f"{why}: drawn from GLOBAL_POSITION_INT about "
                                 f"{lat:.6f}, {lon:.6f}, {alt:.1f} m, flat earth")
+        if self.own_frame:
+            self.missing.append(f"vehicle positions{_whose(self.own_frame)} in the team's frame "
+                                "(only LOCAL_POSITION_NED, about an origin no GLOBAL_POSITION_INT "
+                                "ties to the others'): not placed")
 
     @property
     def n_vehicles(self) -> int:
@@ -232,6 +247,11 @@ class FlightLog:
             if k == 0 or self.phase[k] != self.phase[k - 1]:
                 out.append((float(self.tick_t[k]), Phase(int(self.phase[k])).text))
         return out
+
+
+def _whose(vehicles: list[int] | tuple[int, ...]) -> str:
+    """`` from vehicle 1, 3`` for a ``missing`` line, or nothing for none."""
+    return f" from vehicle {', '.join(map(str, vehicles))}" if vehicles else ""
 
 
 def _gcs_system(index: TlogIndex) -> int | None:
@@ -358,54 +378,91 @@ def _trim(name: str, flat: np.ndarray, team: dict | None) -> np.ndarray:
     return out
 
 
+_Samples = tuple[np.ndarray, np.ndarray, np.ndarray]
+"""Times (K,), positions (K, 3) and velocities (K, 3) of one vehicle, in time order."""
+
+
+@dataclass(frozen=True)
+class _Frame:
+    """The team's one frame: each placed vehicle's samples in it, and how it was found."""
+
+    positions: dict[int, _Samples]
+    from_global: tuple[int, ...]  # placed from GLOBAL_POSITION_INT
+    origin: tuple[float, float, float] | None  # NED zero (lat, lon, alt) when any was
+    spread: float  # m, how far apart the measured LOCAL_POSITION_NED origins are
+    own_frame: tuple[int, ...]  # only local positions, about an origin not known: unplaced
+
+
 def _read_tracks(index: TlogIndex, ground: set[int],
                  progress: Callable[[str, int, int], None] | None = None
-                 ) -> tuple[dict[int, Track], tuple[float, float, float] | None, float]:
-    """Every vehicle's track; the GLOBAL_POSITION_INT origin if a track was placed from it;
-    how far apart the vehicles' LOCAL_POSITION_NED origins are (0 when not comparable).
+                 ) -> tuple[dict[int, Track], _Frame]:
+    """Every vehicle's track, placed in the team's one frame (:func:`_team_frame`).
 
     A vehicle is a system, not a ground station, with an autopilot component:
     the one that sends its positions, else the one whose HEARTBEAT names an
-    autopilot. A vehicle whose positions were not logged is kept (its mode,
-    attitude and battery are still worth seeing), its position unknown.
-
-    Where a vehicle is placed (one rule, so the team's distances mean something):
-    from LOCAL_POSITION_NED when the vehicles' local frames share an origin; from
-    GLOBAL_POSITION_INT, flat earth about the first of those fixes, when it sends
-    no local positions, and for every vehicle that sends fixes when the local
-    origins differ by more than :data:`ORIGIN_TOLERANCE_M` (each autopilot sets
-    its own origin where its estimator started, unless the GCS set one for all).
-    A vehicle's origin is read as its median of global minus local position.
+    autopilot. A vehicle whose positions were not logged, or not placed, is
+    kept (its mode, attitude and battery are still worth seeing), its position
+    unknown.
     """
     vehicles = {s: c for s in index.systems() if s not in ground
                 and (c := _autopilot_component(index, s)) is not None}
-    local: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+    local: dict[int, _Samples] = {}
     fixes: dict[int, tuple[np.ndarray, ...]] = {}
     for sysid, comp in vehicles.items():
         if len((track := _local_positions(index, sysid, comp))[0]):
             local[sysid] = track
         if len((fix := _global_positions(index, sysid, comp))[0]):
             fixes[sysid] = fix
-    reference = _first_fix(fixes[min(fixes)]) if fixes else None
-    placed = {s: (f[0], _flat_earth(f[1], f[2], f[3], reference))  # type: ignore[arg-type]
-              for s, f in fixes.items()}
-    spread = _origin_spread(local, placed)
-    from_global = set(placed) if spread > ORIGIN_TOLERANCE_M else set(placed) - set(local)
-    origin = reference if from_global else None
+    frame = _team_frame(local, fixes)
     wanted = np.isin(index.msgid, [msg_id(name) for name in _TRACK_MESSAGES])
     counts = np.bincount(index.sysid[wanted], minlength=256)
     total, done = int(sum(counts[s] for s in vehicles)), 0
+    nowhere = (np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)))
     tracks: dict[int, Track] = {}
     for sysid, comp in vehicles.items():
-        if sysid in from_global:
-            (t, p), v = placed[sysid], fixes[sysid][4]
-        else:
-            t, p, v = local.get(sysid, (np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3))))
-        tracks[sysid] = _track(index, sysid, comp, t, p, v)
+        tracks[sysid] = _track(index, sysid, comp, *frame.positions.get(sysid, nowhere))
         done += int(counts[sysid])
         if progress is not None:
             progress("tracks", done, total)
-    return tracks, origin, spread
+    return tracks, frame
+
+
+def _team_frame(local: dict[int, _Samples], fixes: dict[int, tuple[np.ndarray, ...]]
+                ) -> _Frame:
+    """Where each vehicle is placed: one rule, so the distances between them mean something.
+
+    Each autopilot sets its LOCAL_POSITION_NED origin where its estimator
+    started, unless the GCS set one for all; a vehicle that sends
+    GLOBAL_POSITION_INT too shows its origin (:func:`_local_origins`).
+
+    - The local frame, when it can hold every vehicle: the measured origins agree
+      within :data:`ORIGIN_TOLERANCE_M` and, if a vehicle sends only fixes, at
+      least one origin was measured. Vehicles with local positions are placed
+      from them (one that sends only those is taken to share the origin); one
+      with only fixes at its flat-earth fix minus the shared origin (their
+      median), z included.
+    - Else the GPS frame: every vehicle with fixes is placed from them, flat
+      earth about the first fix of the lowest system id; one that sends only
+      local positions is not placed, its origin being unknown.
+    """
+    reference = _first_fix(fixes[min(fixes)]) if fixes else None
+    placed: dict[int, tuple[np.ndarray, np.ndarray]] = {} if reference is None else {
+        s: (f[0], _flat_earth(f[1], f[2], f[3], reference)) for s, f in fixes.items()}
+    origins = _local_origins(local, placed)
+    o = np.array(list(origins.values())).reshape(-1, 3)
+    spread = float(np.linalg.norm(o[:, None] - o[None, :], axis=2).max()) if len(o) else 0.0
+    gps_only = sorted(set(placed) - set(local))
+    if spread <= ORIGIN_TOLERANCE_M and (len(o) or not gps_only):
+        zero = np.median(o, axis=0) if len(o) else np.zeros(3)
+        positions = dict(local)
+        for s in gps_only:
+            positions[s] = (placed[s][0], placed[s][1] - zero, fixes[s][4])
+        origin = (None if reference is None or not gps_only
+                  else _from_flat_earth(zero, reference))
+        return _Frame(positions, tuple(gps_only), origin, spread, ())
+    positions = {s: (t, p, fixes[s][4]) for s, (t, p) in placed.items()}
+    return _Frame(positions, tuple(sorted(placed)), reference, spread,
+                  tuple(sorted(set(local) - set(placed))))
 
 
 def _autopilot_component(index: TlogIndex, sysid: int) -> int | None:
@@ -425,16 +482,16 @@ def _first_fix(fix: tuple[np.ndarray, ...]) -> tuple[float, float, float]:
     return float(lat[0]), float(lon[0]), float(alt[0])
 
 
-def _origin_spread(local: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]],
-                   placed: dict[int, tuple[np.ndarray, np.ndarray]]) -> float:
-    """Largest distance between two vehicles' local origins, in the frame of ``placed``, m.
+def _local_origins(local: dict[int, _Samples],
+                   placed: dict[int, tuple[np.ndarray, np.ndarray]]) -> dict[int, np.ndarray]:
+    """Each vehicle's LOCAL_POSITION_NED origin in the frame of ``placed``, m, where known.
 
-    A vehicle's origin is the median of its global position (``placed``: times and
-    flat-earth NED) minus its local position at the same moment (the latest local
-    sample at most :data:`_MATCH_S` before the fix). 0 with fewer than two vehicles
-    that send both.
+    The median of its global position (``placed``: times and flat-earth NED)
+    minus its local position at the same moment (the latest local sample at
+    most :data:`_MATCH_S` before the fix); the median so a glitch moves nothing.
+    Only vehicles that send both, at matching times.
     """
-    origins = []
+    origins = {}
     for sysid, (tl, pl, _) in local.items():
         if sysid not in placed:
             continue
@@ -442,11 +499,8 @@ def _origin_spread(local: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]],
         k = np.searchsorted(tl, tg, side="right") - 1
         near = (k >= 0) & (tg - tl[np.maximum(k, 0)] <= _MATCH_S)
         if near.any():
-            origins.append(np.median(pg[near] - pl[k[near]], axis=0))
-    if len(origins) < 2:
-        return 0.0
-    o = np.array(origins)
-    return float(np.linalg.norm(o[:, None] - o[None, :], axis=2).max())
+            origins[sysid] = np.median(pg[near] - pl[k[near]], axis=0)
+    return origins
 
 
 def _columns(index: TlogIndex, name: str, sysid: int, comp: int
@@ -488,6 +542,17 @@ def _flat_earth(lat: np.ndarray, lon: np.ndarray, alt: np.ndarray,
     north = np.radians(lat - lat0) * EARTH_RADIUS_M
     east = np.radians(lon - lon0) * EARTH_RADIUS_M * np.cos(np.radians(lat0))
     return np.column_stack((north, east, -(alt - alt0)))
+
+
+def _from_flat_earth(ned: np.ndarray, origin: tuple[float, float, float]
+                     ) -> tuple[float, float, float]:
+    """Latitude, longitude (deg) and altitude (m) of ``ned`` about ``origin``: the inverse
+    of :func:`_flat_earth`, to name the shared local origin in ``missing``."""
+    lat0, lon0, alt0 = origin
+    north, east, down = (float(x) for x in ned)
+    return (lat0 + math.degrees(north / EARTH_RADIUS_M),
+            lon0 + math.degrees(east / (EARTH_RADIUS_M * math.cos(math.radians(lat0)))),
+            alt0 - down)
 
 
 def _track(index: TlogIndex, sysid: int, comp: int, t: np.ndarray, p: np.ndarray,

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
 from pymavlink import mavutil
 
@@ -28,10 +29,27 @@ GUIDED = 4
 HOME = (47.3977419, 8.5455938, 488.0)
 """Latitude, longitude (deg) and altitude (m) of the synthetic ArduPilot field."""
 
+START = (4.0, -2.0)
+"""North, east (m) from HOME where vehicle 1 of :func:`ardupilot_log` takes off: not at
+HOME, the origin a GCS sets for all, so a frame about a vehicle's first fix is told apart."""
 
-def raw_messages(path: Path) -> list:
-    """Every message of the file, read by pymavlink (not by our reader)."""
-    conn = mavutil.mavlink_connection(str(path), dialect="common")
+
+def true_position(sysid: int, t: float) -> tuple[float, float, float]:
+    """Where vehicle ``sysid`` of :func:`ardupilot_log` is ``t`` s in: NED about HOME, m."""
+    return START[0] + 0.5 * t, START[1] + 3.0 * (sysid - 1), -2.0
+
+
+def field_fix(north: float, east: float, down: float) -> tuple[float, float, float]:
+    """Latitude, longitude (deg) and altitude (m) of a point NED about HOME, flat earth."""
+    lat0, lon0, alt0 = HOME
+    return (lat0 + math.degrees(north / EARTH_RADIUS_M),
+            lon0 + math.degrees(east / (EARTH_RADIUS_M * math.cos(math.radians(lat0)))),
+            alt0 - down)
+
+
+def raw_messages(path: Path, dialect: str = "common") -> list[Any]:
+    """Every message of the file, read by pymavlink (not by our reader) in ``dialect``."""
+    conn = mavutil.mavlink_connection(str(path), dialect=dialect)
     out = []
     while (m := conn.recv_match()) is not None:
         if m.get_type() != "BAD_DATA":
@@ -65,23 +83,25 @@ def with_frame(flight: Path, out: Path, t: float, frame: bytes) -> Path:
 
 
 def ardupilot_log(path: Path, *, shared_origin: bool, placed: tuple[int, ...] = (1, 2, 3),
+                  gps_only: tuple[int, ...] = (), local_only: tuple[int, ...] = (),
                   seconds: float = 6.0, rate: float = 10.0) -> Path:
     """Four ArduCopters and a GCS as a real telemetry log shows them, 10 Hz for ``seconds``.
 
     Every vehicle sends HEARTBEAT (ARDUPILOTMEGA, GUIDED, disarmed for its first
     second, then armed), ATTITUDE (banked 0.5 rad while disarmed, at most 0.2 rad
-    when armed) and SYS_STATUS (battery 90 %, one less every 2 s). The ``placed``
-    ones fly north side by side, vehicle s at 3 (s - 1) m east, and send
-    GLOBAL_POSITION_INT and LOCAL_POSITION_NED too: their local origins are where
-    each one started unless ``shared_origin`` (then the field's origin, as when a
-    GCS sets one for all). The others send no position at all. A Mission Planner
-    heartbeat (system 255, MAV_TYPE_GCS) is there too.
+    when armed) and SYS_STATUS (battery 90 %, one less every 2 s). Each vehicle
+    flies north side by side with the others (:func:`true_position`, 3 m apart
+    east, 2 m up); the ``placed`` ones send GLOBAL_POSITION_INT and
+    LOCAL_POSITION_NED, the ``gps_only`` ones only the first, the ``local_only``
+    ones only the second. Local origins are where each one started (on the
+    ground) unless ``shared_origin`` (then HOME, as when a GCS sets one for all).
+    The others send no position at all. A Mission Planner heartbeat (system 255,
+    MAV_TYPE_GCS) is there too.
     """
     rec = TlogRecorder(path, encoder=MavlinkEncoder(system_id=255, component_id=190),
                        epoch=1_700_000_000.0)
     encs = {s: MavlinkEncoder(system_id=s, component_id=1) for s in VEHICLES}
     gcs = MavlinkEncoder(system_id=255, component_id=190)
-    lat0, lon0, alt0 = HOME
     for k in range(round(seconds * rate)):
         t = k / rate
         armed = t >= 1.0
@@ -98,16 +118,15 @@ def ardupilot_log(path: Path, *, shared_origin: bool, placed: tuple[int, ...] = 
                 k * 100, roll, 0.05, 0.1 * s, 0.0, 0.0, 0.0)))
             rec.frame(t, enc.encode(enc.mav.sys_status_encode(
                 0, 0, 0, 500, 15800, -1, 90 - k // 20, 0, 0, 0, 0, 0, 0)))
-            if s not in placed:
-                continue
-            north, east, down = 0.5 * t, 3.0 * (s - 1), -2.0
-            lat = lat0 + math.degrees(north / EARTH_RADIUS_M)
-            lon = lon0 + math.degrees(east / (EARTH_RADIUS_M * math.cos(math.radians(lat0))))
-            rec.frame(t, enc.encode(enc.mav.global_position_int_encode(
-                k * 100, round(lat * 1e7), round(lon * 1e7), round((alt0 - down) * 1e3),
-                round(-down * 1e3), 50, 0, 0, 0)))
-            east0 = 0.0 if shared_origin else east  # each started at (0, east)
-            rec.frame(t, enc.encode(enc.mav.local_position_ned_encode(
-                k * 100, north, east - east0, down, 0.5, 0.0, 0.0)))
+            north, east, down = true_position(s, t)
+            if s in (*placed, *gps_only):
+                lat, lon, alt = field_fix(north, east, down)
+                rec.frame(t, enc.encode(enc.mav.global_position_int_encode(
+                    k * 100, round(lat * 1e7), round(lon * 1e7), round(alt * 1e3),
+                    round(-down * 1e3), 50, 0, 0, 0)))
+            if s in (*placed, *local_only):
+                n0, e0, _ = (0.0, 0.0, 0.0) if shared_origin else true_position(s, 0.0)
+                rec.frame(t, enc.encode(enc.mav.local_position_ned_encode(
+                    k * 100, north - n0, east - e0, down, 0.5, 0.0, 0.0)))
     rec.close()
     return path

@@ -15,13 +15,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gcs.flightlog import EARTH_RADIUS_M, FlightLog
+from gcs.flightlog import FlightLog
 from gcs.link.dialect import mavlink
 from gcs.link.encoder import MavlinkEncoder
 from gcs.link.modes import CUSTOM_MODE_ENABLED, SAFETY_ARMED, SimMode
 from gcs.logreader import TlogIndex
 from gcs.recorder import TlogRecorder
-from tests.logfiles import HOME, ardupilot_log, raw_messages
+from tests.logfiles import HOME, ardupilot_log, field_fix, raw_messages, true_position
 
 EPOCH = 1_700_000_000.0
 RATE = 10.0  # vehicle messages per second
@@ -114,16 +114,14 @@ def test_the_recorders_gcs_is_found_by_its_team_header(tmp_path: Path) -> None:
 def test_global_positions_stand_in_for_local_ones(tmp_path: Path) -> None:
     path = tmp_path / "global.tlog"
     rec = _recorder(path, sysid=255)
-    lat0, lon0, alt0 = 47.3977419, 8.5455938, 488.0
     encs = {s: MavlinkEncoder(system_id=s, component_id=1) for s in (1, 2)}
     for k in range(50):
         t = k / RATE
         for s, enc in encs.items():
-            north, east = 0.5 * k, 3.0 * (s - 1)  # vehicle 2 three metres east of 1
-            lat = lat0 + math.degrees(north / EARTH_RADIUS_M)
-            lon = lon0 + math.degrees(east / (EARTH_RADIUS_M * math.cos(math.radians(lat0))))
+            # vehicle 2 three metres east of 1
+            lat, lon, alt = field_fix(0.5 * k, 3.0 * (s - 1), -2.0)
             rec.frame(t, enc.encode(enc.mav.global_position_int_encode(
-                k * 100, round(lat * 1e7), round(lon * 1e7), round((alt0 + 2.0) * 1e3),
+                k * 100, round(lat * 1e7), round(lon * 1e7), round(alt * 1e3),
                 2000, 500, 0, -10, 0)))
     rec.close()
     log = FlightLog.load(path)
@@ -157,11 +155,29 @@ def test_damaged_frames_and_stamps_are_left_out_and_counted(tmp_path: Path) -> N
     assert log.link_losses() == {(1, 1): 2}  # the two damaged records are missing frames
 
 
+def _distances(log: FlightLog, ids: tuple[int, ...]) -> np.ndarray:
+    """Distances between the vehicles ``ids`` at each sample, m (they sample together)."""
+    p = np.stack([log.tracks[s].p_ned for s in ids])
+    return np.linalg.norm(p[:, None] - p[None, :], axis=3)
+
+
+def _true_distances(ids: tuple[int, ...], samples: int) -> np.ndarray:
+    """What :func:`_distances` must give on :func:`ardupilot_log`: 3 m apart east."""
+    p = np.array([[true_position(s, k / RATE) for k in range(samples)] for s in ids])
+    return np.linalg.norm(p[:, None] - p[None, :], axis=3)
+
+
+def _placing(log: FlightLog) -> list[str]:
+    """The ``missing`` lines that say a vehicle was placed from GLOBAL_POSITION_INT."""
+    return [m for m in log.missing if "GLOBAL_POSITION_INT about" in m]
+
+
 @pytest.mark.parametrize("shared_origin", [False, True])
 def test_ardupilot_vehicles_are_placed_in_one_frame(tmp_path: Path, shared_origin: bool) -> None:
     """Each ArduCopter's LOCAL_POSITION_NED is about its own origin (where its estimator
     started), so three vehicles flying 3 m apart all read (0, 0) there: they are placed
-    from GLOBAL_POSITION_INT then; with a shared origin, from their local positions."""
+    from GLOBAL_POSITION_INT then, about vehicle 1's first fix; with a shared origin,
+    from their local positions."""
     path = ardupilot_log(tmp_path / "ap.tlog", shared_origin=shared_origin)
     stages: dict[str, list[tuple[int, int]]] = {}
     log = FlightLog.load(path, progress=lambda stage, done, total:
@@ -171,24 +187,23 @@ def test_ardupilot_vehicles_are_placed_in_one_frame(tmp_path: Path, shared_origi
     total = 3 * placed + unplaced
     assert stages["tracks"] == [(k * placed, total) for k in (1, 2, 3)] + [(total, total)]
     assert sorted(log.tracks) == [1, 2, 3, 4] and log.ground == {255}
-    local = {s: [(m.x, m.y, m.z) for m in raw_messages(path)
-                 if m.get_type() == "LOCAL_POSITION_NED" and m.get_srcSystem() == s]
-             for s in (1, 2, 3)}
+    zero = np.zeros(3) if shared_origin else np.array(true_position(1, 0.0))
     for s in (1, 2, 3):
-        p = log.tracks[s].p_ned
-        np.testing.assert_allclose(p[:, 1], 3.0 * (s - 1), atol=0.02)  # metres east
-        np.testing.assert_allclose(p[:, 0], 0.05 * np.arange(len(p)), atol=0.02)
+        truth = np.array([true_position(s, k / RATE) for k in range(60)]) - zero
+        np.testing.assert_allclose(log.tracks[s].p_ned, truth, atol=0.02)
         if shared_origin:
-            np.testing.assert_array_equal(p, np.array(local[s], dtype=np.float32))
-    placing = [m for m in log.missing if "GLOBAL_POSITION_INT about" in m]
+            local = [(m.x, m.y, m.z) for m in raw_messages(path)
+                     if m.get_type() == "LOCAL_POSITION_NED" and m.get_srcSystem() == s]
+            np.testing.assert_array_equal(log.tracks[s].p_ned, np.array(local, np.float32))
     if shared_origin:
-        assert log.origin is None and log.origin_spread < 0.05 and placing == []
+        assert log.origin is None and log.origin_spread < 0.05 and _placing(log) == []
     else:
         assert log.origin is not None and log.origin_spread == pytest.approx(6.0, abs=0.02)
-        assert placing == [
+        lat, lon, alt = field_fix(*true_position(1, 0.0))
+        assert _placing(log) == [
             "a shared local frame (the vehicles' LOCAL_POSITION_NED origins differ by up to "
-            f"6.0 m): drawn from GLOBAL_POSITION_INT about {HOME[0]:.6f}, {HOME[1]:.6f}, "
-            f"{HOME[2] + 2.0:.1f} m, flat earth"]
+            f"6.0 m): drawn from GLOBAL_POSITION_INT about {lat:.6f}, {lon:.6f}, "
+            f"{alt:.1f} m, flat earth"]
     four = log.tracks[4]  # attitude, mode and battery, no position: kept
     assert len(four.t) == 0 and len(four.att_t) == 60 and four.mode(-1) == "GUIDED"
     assert bool(four.armed[-1]) and four.battery[-1] == 88.0
@@ -199,3 +214,36 @@ def test_ardupilot_vehicles_are_placed_in_one_frame(tmp_path: Path, shared_origi
     worst = max(math.acos(math.cos(0.2 * math.sin(k / RATE + s)) * math.cos(0.05))
                 for k in range(10, 60) for s in (1, 2, 3, 4))  # armed from 1 s on
     assert metrics["worst_bank_rad"] == pytest.approx(worst, abs=1e-4)  # not the 0.5 disarmed
+
+
+@pytest.mark.parametrize(("shared_origin", "both"), [(True, (1, 2)), (False, (1, 2)), (True, ())])
+def test_a_vehicle_with_one_kind_of_position_joins_the_team_frame(
+        tmp_path: Path, shared_origin: bool, both: tuple[int, ...]) -> None:
+    """Vehicle 3 sends only GLOBAL_POSITION_INT, vehicle 4 only LOCAL_POSITION_NED, beside
+    vehicles sending ``both``. With a shared origin measured, 3 is placed about it (not
+    about vehicle 1's first fix, 4.5 m away and 2 m up) and 4 from its local
+    positions; else the team is placed from GPS and 4, whose origin is unknown, nowhere."""
+    path = ardupilot_log(tmp_path / "mixed.tlog", shared_origin=shared_origin, placed=both,
+                         gps_only=(3,) if both else (1, 2, 3), local_only=(4,))
+    log = FlightLog.load(path)
+    if shared_origin and both:
+        ids = (1, 2, 3, 4)
+        truth = np.array([true_position(3, k / RATE) for k in range(60)])  # about HOME
+        np.testing.assert_allclose(log.tracks[3].p_ned, truth, atol=0.03)
+        assert log.origin is not None and log.origin_spread < 0.05 and log.own_frame == ()
+        lat, lon, alt = HOME
+        assert _placing(log) == [
+            "local positions from vehicle 3 (about the others' local origin): drawn from "
+            f"GLOBAL_POSITION_INT about {lat:.6f}, {lon:.6f}, {alt:.1f} m, flat earth"]
+    else:
+        ids = (1, 2, 3)
+        assert len(log.tracks[4].t) == 0 and len(log.tracks[4].att_t) == 60
+        assert log.own_frame == (4,) and log.from_global == (1, 2, 3)
+        why = ("the vehicles' LOCAL_POSITION_NED origins differ by up to 3.0 m" if both else
+               "no vehicle sent both LOCAL_POSITION_NED and GLOBAL_POSITION_INT, to tie the two")
+        assert _placing(log)[0].startswith(f"a shared local frame ({why}): ")
+        assert ("vehicle positions from vehicle 4 in the team's frame (only LOCAL_POSITION_NED, "
+                "about an origin no GLOBAL_POSITION_INT ties to the others'): not placed"
+                in log.missing)
+        assert not any("(no LOCAL_POSITION_NED or" in m for m in log.missing)
+    np.testing.assert_allclose(_distances(log, ids), _true_distances(ids, 60), atol=0.03)

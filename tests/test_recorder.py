@@ -12,8 +12,10 @@ from pymavlink import mavutil
 
 from gcs.link.encoder import MavlinkEncoder
 from gcs.recorder import ARRAYS, TlogRecorder
+from tests.logfiles import raw_messages
 
 EPOCH = 1_700_000_000.0
+DIALECT = "ardupilotmega"  # read as Mission Planner reads a log
 
 
 def record(path: Path, ticks: int = 20) -> MavlinkEncoder:
@@ -33,19 +35,10 @@ def record(path: Path, ticks: int = 20) -> MavlinkEncoder:
     return gcs
 
 
-def read_all(path: Path) -> list:  # type: ignore[type-arg]
-    log = mavutil.mavlink_connection(str(path), dialect="ardupilotmega")
-    out = []
-    while (msg := log.recv_match()) is not None:
-        if msg.get_type() != "BAD_DATA":
-            out.append(msg)
-    return out
-
-
 def test_mavutil_reads_frames_internals_and_timestamps(tmp_path: Path) -> None:
     path = tmp_path / "flight.tlog"
     record(path)
-    msgs = read_all(path)
+    msgs = raw_messages(path, DIALECT)
     kinds = {m.get_type() for m in msgs}
     assert {"HEARTBEAT", "DEBUG_FLOAT_ARRAY", "NAMED_VALUE_FLOAT", "NAMED_VALUE_INT",
             "STATUSTEXT"} <= kinds
@@ -66,10 +59,10 @@ def test_mavutil_reads_frames_internals_and_timestamps(tmp_path: Path) -> None:
 def test_truncated_log_reads_up_to_the_cut(tmp_path: Path) -> None:
     path = tmp_path / "cut.tlog"
     record(path)
-    whole = len(read_all(path))
+    whole = len(raw_messages(path, DIALECT))
     data = path.read_bytes()
     path.write_bytes(data[: int(len(data) * 0.6) + 7])  # cut inside a record
-    part = read_all(path)
+    part = raw_messages(path, DIALECT)
     assert 0.5 * whole < len(part) < whole
 
 

@@ -10,16 +10,18 @@ decoded) and clicks and chooses as a browser does.
 from __future__ import annotations
 
 import html as html_lib
+import queue
 import re
 import signal
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import cast
+from typing import IO, cast
 
 import msgspec
 import numpy as np
@@ -138,10 +140,14 @@ class PageViewer:
             time.sleep(0.02)
         return True
 
-    def settled(self, quiet: float = 0.5) -> set[str]:
-        """:meth:`texts` once nothing new arrived for ``quiet`` seconds."""
+    def settled(self, quiet: float = 0.5, timeout: float = 30.0) -> set[str]:
+        """:meth:`texts` once nothing new arrived for ``quiet`` seconds; fails if the page
+        still changes after ``timeout`` seconds (a page that never rests would hang the test)."""
+        deadline = time.monotonic() + timeout
         last: set[str] | None = None
         while (now := self.texts()) != last:
+            if time.monotonic() > deadline:
+                pytest.fail(f"the page kept changing for {timeout:.0f} s")
             last = now
             time.sleep(quiet)
         return now
@@ -162,32 +168,100 @@ def viewer_of(port: int, timeout: float = 10.0) -> Iterator[PageViewer]:
         viewer.close()
 
 
+class OutputLines:
+    """A process's output, read line by line on a thread, so that waiting for a line can
+    have a deadline (a readline on the pipe would wait for ever on a silent process)."""
+
+    def __init__(self, stream: IO[str]) -> None:
+        self._lines: queue.Queue[str | None] = queue.Queue()
+        threading.Thread(target=self._read, args=(stream,), daemon=True).start()
+
+    def _read(self, stream: IO[str]) -> None:
+        for line in stream:
+            self._lines.put(line.rstrip("\n"))
+        self._lines.put(None)  # the process closed its output
+
+    def next(self, deadline: float, what: str) -> str | None:
+        """The next line, None once the output ended; fails, naming ``what`` it waited
+        for, if none came by ``deadline`` (time.monotonic())."""
+        try:
+            return self._lines.get(timeout=max(0.0, deadline - time.monotonic()))
+        except queue.Empty:
+            pytest.fail(f"timed out waiting for {what}")
+
+    def rest(self, deadline: float, what: str) -> list[str]:
+        """Every line up to the end of the output, which must come by ``deadline``."""
+        out = []
+        while (line := self.next(deadline, what)) is not None:
+            out.append(line)
+        return out
+
+
 @contextmanager
 def served(path: Path) -> Iterator[tuple[int, list[str]]]:
     """``gcs replay PATH`` in its own process: its port, and its stdout lines from its
     address on, once stopped (by Ctrl-C, which must end it with status 0)."""
     port = free_tcp_port()
-    proc = subprocess.Popen([sys.executable, "-m", "gcs", "replay", str(path), "--port",
-                             str(port), "--quiet"], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
-    lines: list[str] = []
+    with tempfile.TemporaryFile("w+") as err:
+        proc = subprocess.Popen([sys.executable, "-m", "gcs", "replay", str(path), "--port",
+                                 str(port), "--quiet"], stdout=subprocess.PIPE, stderr=err,
+                                text=True)
+        assert proc.stdout is not None
+        out = OutputLines(proc.stdout)
+        lines: list[str] = []
+        try:
+            deadline = time.monotonic() + 60
+            while not lines or "GCS replay:" not in lines[-1]:
+                line = out.next(deadline, "gcs replay's address")
+                if line is None:
+                    err.seek(0)
+                    pytest.fail(f"gcs replay ended before its address: {err.read()}")
+                lines.append(line)
+            assert lines[-1].startswith(f"GCS replay: http://127.0.0.1:{port}")
+            del lines[:-1]  # viser's banner
+            yield port, lines
+            proc.send_signal(signal.SIGINT)
+            assert proc.wait(timeout=20) == 0
+            lines += [line for line in out.rest(time.monotonic() + 10, "gcs replay's output")
+                      if not line.startswith("(viser)")]
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+
+
+def test_the_waits_on_a_page_and_a_process_end() -> None:
+    """A page that never rests and a process that never prints fail these tests, in time,
+    rather than hang them."""
+    server = viser.ViserServer(host="127.0.0.1", port=free_tcp_port(), verbose=False)
+    ticking = server.gui.add_markdown("0")
+    stop = threading.Event()
+
+    def tick() -> None:
+        while not stop.wait(0.1):
+            ticking.content = f"{time.monotonic():.3f}"
+
+    ticker = threading.Thread(target=tick, daemon=True)
+    ticker.start()
     try:
-        deadline = time.monotonic() + 60
-        while not lines or "GCS replay:" not in lines[-1]:
-            assert time.monotonic() < deadline and proc.poll() is None, \
-                proc.stderr.read()  # type: ignore[union-attr]
-            lines.append(proc.stdout.readline().rstrip("\n"))  # type: ignore[union-attr]
-        assert lines[-1].startswith(f"GCS replay: http://127.0.0.1:{port}")
-        del lines[:-1]  # viser's banner
-        yield port, lines
-        proc.send_signal(signal.SIGINT)
-        out = proc.stdout.read()  # type: ignore[union-attr]  # (communicate() would skip
-        assert proc.wait(timeout=20) == 0  # what readline() already buffered)
-        lines += [line for line in out.splitlines() if not line.startswith("(viser)")]
+        with viewer_of(server.get_port()) as viewer, \
+                pytest.raises(pytest.fail.Exception, match="the page kept changing for 2 s"):
+            viewer.settled(timeout=2.0)
     finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
+        stop.set()
+        ticker.join()
+        server.stop()
+    silent = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"],
+                              stdout=subprocess.PIPE, text=True)
+    try:
+        assert silent.stdout is not None
+        start = time.monotonic()
+        with pytest.raises(pytest.fail.Exception, match="timed out waiting for a line"):
+            OutputLines(silent.stdout).next(start + 0.5, "a line")
+        assert time.monotonic() - start < 5.0
+    finally:
+        silent.kill()
+        silent.wait()
 
 
 def test_replayed_positions_are_the_recorded_ones(flight: Path) -> None:
