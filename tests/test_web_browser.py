@@ -3,8 +3,12 @@
 Headless Chromium (Debian's /usr/bin/chromium) is driven by Playwright. The
 vehicles' motion is read from the simulator's ground truth over zenoh by a
 second, independent zenoh session, so a test passes only if the real
-simulated vehicles moved. The tests share one demo and run in file order:
-fly from the page, then a second viewer, then abort, then Ctrl-C.
+simulated vehicles moved. What each browser received over its websocket is
+decoded too (``web.wireviewer.SceneRecord``): the scene it holds and how many
+updates a second reach it. The tests share one demo and run in file order:
+fly from the page, then a second viewer, then the always-visible abort at a
+small window with the panels collapsed, then Ctrl-C. Screenshots go to the
+pytest temporary directory (the path is printed; ``-s`` shows it).
 """
 
 from __future__ import annotations
@@ -23,13 +27,21 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import viser
 
 from gcs.link import keys
 from gcs.link.zenoh_session import ZenohSettings, open_session
 from gcs.simprocess import free_tcp_port
 from gcs.simtruth import SimTruth
+from web import palette
+from web.wireviewer import SceneRecord
 
 CHROMIUM = Path("/usr/bin/chromium")
+VEHICLES = "/team/vehicles"
+SCENE_GREEN_MIN = 500
+SCENE_MAGENTA_MIN = 50
+"""Pixels of the ok vehicles' green and of the payload's magenta the start view must show
+(measured: see the printed counts; with either hidden, the count is 0)."""
 ROOT = Path(__file__).resolve().parents[1]
 CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
                  "--disable-background-networking", "--disable-component-update",
@@ -167,15 +179,48 @@ def browser(tmp_path_factory):  # type: ignore[no-untyped-def]
         b.close()
 
 
+WIRES: dict[int, SceneRecord] = {}
+"""What each page (by ``id``) received over its websocket, decoded."""
+
+
 def open_page(browser, demo: Demo):  # type: ignore[no-untyped-def]
     page = browser.new_context(viewport={"width": 1400, "height": 800}).new_page()
+    record = WIRES[id(page)] = SceneRecord()
+
+    def on_websocket(ws) -> None:  # type: ignore[no-untyped-def]
+        def on_frame(payload: bytes | str) -> None:
+            if isinstance(payload, bytes):
+                record.take(payload, time.monotonic())
+        ws.on("framereceived", on_frame)
+
+    page.on("websocket", on_websocket)
     page.goto(demo.url)
     page.get_by_role("button", name="ABORT: hold, then land").wait_for(timeout=30_000)
     return page
 
 
+def wire(page) -> SceneRecord:  # type: ignore[no-untyped-def]
+    """The scene as ``page`` received it (Playwright delivers frames during its own calls)."""
+    page.evaluate("0")
+    return WIRES[id(page)]
+
+
+@pytest.fixture(scope="module")
+def screens(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Where the tests' screenshots go (printed, to look at after a run)."""
+    path = tmp_path_factory.mktemp("screens")
+    print(f"browser screenshots: {path}")
+    return path
+
+
 @pytest.fixture(scope="module")
 def pilot(browser, demo: Demo):  # type: ignore[no-untyped-def]
+    return open_page(browser, demo)
+
+
+@pytest.fixture(scope="module")
+def viewer(browser, demo: Demo):  # type: ignore[no-untyped-def]
+    """A second browser, opened when the second-viewer test needs it."""
     return open_page(browser, demo)
 
 
@@ -232,7 +277,9 @@ def situation(page, demo: Demo) -> str:  # type: ignore[no-untyped-def]
     """What the page and the demo said, for a failure message."""
     rows = " | ".join(page.locator(f"[data-gcs=vehicle-{vid}]").inner_text().replace("\n", " ")
                       for vid in (1, 2, 3, 4))
-    return (f"phase {text(page, 'phase')}; command {text(page, 'operator')}; "
+    centre = np.asarray(demo.truth.vehicle_p_ned).mean(axis=0) if demo.truth else None
+    return (f"phase {text(page, 'phase')}; team at {centre} m (NED); "
+            f"command {text(page, 'operator')}; "
             f"vehicles {rows}; events {text(page, 'events')[-600:]}; "
             f"demo said {''.join(demo.lines[-6:] + demo.err[-6:])[-800:]}")
 
@@ -248,46 +295,107 @@ def operator(page) -> dict[str, float | str]:  # type: ignore[no-untyped-def]
     return values
 
 
-def scene_pixels(page) -> tuple[int, int]:  # type: ignore[no-untyped-def]
-    """Pixels of the 3-D view in the vehicles' "ok" green and in the payload's orange.
+def hue_saturation_value(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Hue (degrees), saturation and value (0..1) of (..., 3) colours in 0..255."""
+    c = np.asarray(rgb, dtype=float) / 255.0
+    r, g, b = c[..., 0], c[..., 1], c[..., 2]
+    top = c.max(axis=-1)
+    span = top - c.min(axis=-1)
+    safe = np.where(span > 0, span, 1.0)
+    hue = np.select([top == r, top == g], [((g - b) / safe) % 6.0, (b - r) / safe + 2.0],
+                    (r - g) / safe + 4.0)
+    return 60.0 * hue, np.where(top > 0, span / np.where(top > 0, top, 1.0), 0.0), top
 
-    The top of the view is left out: viser's notice about software WebGL sits there,
-    with an orange edge.
+
+def near_hue(hue: np.ndarray, colour: tuple[int, int, int] | np.ndarray,
+             within: float) -> np.ndarray:
+    """Where ``hue`` is within ``within`` degrees of ``colour``'s hue."""
+    (own,), _, _ = hue_saturation_value(np.array([colour]))
+    return np.abs((hue - own + 180.0) % 360.0 - 180.0) <= within
+
+
+GIZMO_PX = 120
+"""The axes gizmo (pure red, green and blue) sits in this square at the view's bottom left."""
+
+
+def scene_pixels(page, save: Path) -> tuple[int, int]:  # type: ignore[no-untyped-def]
+    """Pixels of the 3-D view in an ok vehicle's green and in the payload's magenta.
+
+    By hue and saturation, whatever the lighting's shade: no other colour of the
+    scene comes near these hues (``web/palette.py``, the rule tested in
+    test_web_frame.py), nor do the page's notifications or the red abort button.
+    The screenshot is saved to ``save``.
     """
     import imageio.v3 as iio  # a viser dependency
 
     canvases = page.locator("canvas[data-engine^='three.js']")
     boxes = [canvases.nth(k).bounding_box() for k in range(canvases.count())]
     biggest = max(range(len(boxes)), key=lambda k: boxes[k]["width"] * boxes[k]["height"])
-    png = canvases.nth(biggest).screenshot()
-    rgb = np.asarray(iio.imread(png, extension=".png"))[200:, :, :3].astype(int)
-    r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
-    green = (g > r + 40) & (g > b + 10)
-    orange = (r > 150) & (r - b > 110) & (g > 60) & (g < r - 40)
-    return int(green.sum()), int(orange.sum())
+    png = canvases.nth(biggest).screenshot(path=str(save))
+    rgb = np.asarray(iio.imread(png, extension=".png"))[..., :3].copy()
+    rgb[-GIZMO_PX:, :GIZMO_PX] = 255
+    hue, saturation, value = hue_saturation_value(rgb)
+    green = near_hue(hue, palette.OK, 22.0) & (saturation >= 0.3) & (value >= 0.15)
+    magenta = near_hue(hue, palette.PAYLOAD, 22.0) & (saturation >= 0.5) & (value >= 0.12)
+    return int(green.sum()), int(magenta.sum())
 
 
-def test_page_shows_the_team_and_the_payload(pilot, demo: Demo) -> None:
+def test_page_shows_the_team_and_the_payload(pilot, demo: Demo, screens: Path) -> None:
     wait_for(lambda: text(pilot, "phase") == "ready", 30, "phase ready")
     for vid in (1, 2, 3, 4):
         row = pilot.locator(f"[data-gcs=vehicle-{vid}]").inner_text()
         assert "IDLE" in row and "ok" in row, row
     assert "(simulator)" in text(pilot, "payload")
-    green, orange = scene_pixels(pilot)
-    assert green > 15 and orange > 15, f"3-D view: {green} vehicle, {orange} payload pixels"
+
+    # what the browser received: NED shown right way up (up is -z), every vehicle and the
+    # payload visible, in their colours, where the simulator has them
+    truth = demo.sample()
+    scene = wire(pilot)
+    root = viser.transforms.SO3(np.array(scene.wait_for("")["wxyz"])).as_matrix()
+    np.testing.assert_allclose(root @ [0.0, 0.0, -1.0], [0.0, 1.0, 0.0], atol=1e-6)
+    vehicles = scene.wait_for("/team/vehicles")
+    order = [list(truth.ids).index(vid) for vid in (1, 2, 3, 4)]
+    assert vehicles["visible"]
+    np.testing.assert_allclose(vehicles["batched_positions"].reshape(-1, 3),
+                               np.asarray(truth.vehicle_p_ned)[order], atol=0.1)
+    np.testing.assert_array_equal(vehicles["batched_scales"], 1.0)
+    assert (vehicles["batched_colors"].reshape(-1, 3) == palette.OK).all()
+    payload = scene.wait_for("/team/payload")
+    assert payload["visible"] and tuple(payload["color"]) == tuple(palette.PAYLOAD)
+    np.testing.assert_allclose(payload["position"], truth.payload_p_ned, atol=0.1)
+
+    # ... and what it drew
+    shot = screens / "ready-scene.png"
+    green, magenta = scene_pixels(pilot, shot)
+    print(f"3-D view at ready: {green} ok-green, {magenta} payload-magenta pixels ({shot})")
+    assert green > SCENE_GREEN_MIN and magenta > SCENE_MAGENTA_MIN, (
+        f"3-D view: {green} vehicle, {magenta} payload pixels; see {shot}")
     assert "nobody" in text(pilot, "control")
     assert banner(pilot).startswith("View only")
     assert pilot.get_by_role("button", name="arm", exact=True).is_disabled()
 
 
+def press_phase(page, button: str, phase: str, demo: Demo,  # type: ignore[no-untyped-def]
+                timeout: float = 40.0) -> None:
+    """Press a phase button and wait for the page to show ``phase``."""
+    page.get_by_role("button", name=button, exact=True).click()
+    wait_for(lambda: text(page, "phase") == phase, timeout, f"phase {phase}",
+             lambda: situation(page, demo))
+
+
 def test_the_pilot_flies_the_team_with_buttons_keys_and_sticks(pilot, demo: Demo,
-                                                                tmp_path: Path) -> None:
+                                                                screens: Path) -> None:
     pilot.get_by_role("button", name="Take control").click()
     wait_for(lambda: banner(pilot) == "You hold control.", 10, "control taken")
-    for button, phase in (("arm", "armed"), ("take off", "hover"), ("lift", "formation")):
-        pilot.get_by_role("button", name=button, exact=True).click()
-        wait_for(lambda p=phase: text(pilot, "phase") == p, 40, f"phase {phase}",
-                 lambda: situation(pilot, demo))
+    for button, phase in (("arm", "armed"), ("take off", "hover"), ("lift", "lifting")):
+        press_phase(pilot, button, phase, demo)
+    # set down while lifting: the altitude target drops back, the team is in hover again
+    lifted = float(operator(pilot)["target"])
+    press_phase(pilot, "set down", "setting down", demo, timeout=10)
+    assert float(operator(pilot)["target"]) < lifted - 1.0, text(pilot, "operator")
+    wait_for(lambda: text(pilot, "phase") == "hover", 30, "hover after set down",
+             lambda: situation(pilot, demo))
+    press_phase(pilot, "lift", "formation", demo)
 
     # hotkey: hold W, the loop commands full forward and the real team speeds up northwards
     keyboard = pilot.keyboard
@@ -297,6 +405,31 @@ def test_the_pilot_flies_the_team_with_buttons_keys_and_sticks(pilot, demo: Demo
         f"velocity change {dv} m/s with W; expected north; {situation(pilot, demo)}")
     wait_for(lambda: operator(pilot)["fwd"] == 0.0, 5, "sticks centred after W is released")
     assert str(operator(pilot)["source"]).startswith("browser#")
+
+    # guidance off: shown, a held S (back: south, against the drift W left, away from the
+    # geofence) commands nothing and the team does not speed up; switched on again with S
+    # still held, S flies (the key was sent all along: a focused checkbox takes no keys)
+    guidance = pilot.get_by_label("guidance on")
+    guidance.click()
+    wait_for(lambda: "guidance off" in text(pilot, "operator"), 5, "guidance off shown")
+    before = demo.velocity()
+    keyboard.down("s")
+    try:
+        time.sleep(2.0)
+        after = demo.velocity()
+        assert operator(pilot)["fwd"] == 0.0, text(pilot, "operator")
+        guidance.click()
+        wait_for(lambda: "guidance on" in text(pilot, "operator"), 5, "guidance on shown")
+        commanded(pilot, "fwd", lambda v: v < -0.9, "fwd < -0.9: S held, guidance on")()
+        time.sleep(1.5)  # and brakes the drift W left: the geofence is 4 m from the start
+    finally:
+        keyboard.up("s")
+    print(f"guidance off, S held 2 s: speed {np.linalg.norm(before):.3f} -> "
+          f"{np.linalg.norm(after):.3f} m/s")
+    assert np.linalg.norm(after) <= np.linalg.norm(before) + 0.03, (
+        f"guidance off, S held 2 s: velocity {before} -> {after} m/s; "
+        f"{situation(pilot, demo)}")
+    wait_for(lambda: operator(pilot)["fwd"] == 0.0, 5, "sticks centred after S")
 
     # hotkey: hold E, the loop commands clockwise rotation and the real team turns clockwise
     dw = steer(demo, lambda: keyboard.down("e"), lambda: keyboard.up("e"), motion=demo.spin,
@@ -349,13 +482,38 @@ def test_the_pilot_flies_the_team_with_buttons_keys_and_sticks(pilot, demo: Demo
     wait_for(lambda: operator(pilot)["scale"] == pytest.approx(before["scale"]), 5,
              "scale target back")
 
-    rate = float(text(pilot, "ui-rate"))
-    assert rate >= 20.0, f"UI at {rate} Hz"
+
+    # the rate this browser receives the team's frames at (not what the server meant to
+    # send), and its vehicles' moves among them
+    scene = wire(pilot)
+    start, frames, moves = time.monotonic(), scene.updates("/team"), scene.updates(VEHICLES)
+    pilot.wait_for_timeout(4000)  # Playwright delivers the frames while it waits
+    scene = wire(pilot)
+    elapsed = time.monotonic() - start
+    rate = (scene.updates("/team") - frames) / elapsed
+    moved = (scene.updates(VEHICLES) - moves) / elapsed
+    print(f"received by the browser: {rate:.1f} scene updates/s, {moved:.1f} with the "
+          f"vehicles moved (the page drew {text(pilot, 'ui-rate')}/s)")
+    assert rate >= 20.0, f"the browser received {rate:.1f} scene updates a second"
+
+    # the vehicles table fits its panel: the last column (rtt) without scrolling sideways
+    # (measured in one go: the table is rebuilt with every tick)
+    fit = pilot.evaluate("""() => {
+        const box = document.querySelector("[data-gcs=vehicles]");
+        const last = box.querySelector("tr:first-child th:last-child");
+        return {header: last.textContent, overflow: box.scrollWidth - box.clientWidth,
+                right: last.getBoundingClientRect().right,
+                panel: box.getBoundingClientRect().right};
+    }""")
+    assert fit["header"] == "rtt ms" and fit["overflow"] <= 1 and fit["right"] <= fit["panel"], (
+        f"the vehicles table does not fit its panel: {fit}")
+
     pilot.get_by_role("tab", name="Plots").click()
     assert pilot.get_by_text("distances (m)").is_visible()
     pilot.get_by_role("tab", name="Status").click()
-    shot = tmp_path / "page.png"
+    shot = screens / "page-flying.png"
     pilot.screenshot(path=str(shot))
+    print(f"page while flying: {shot}")
     assert shot.stat().st_size > 50_000
     if os.environ.get("GCS_SAVE_SCREENSHOT"):  # refresh the README's picture
         notices = pilot.locator(".mantine-Notification-closeButton")
@@ -365,8 +523,7 @@ def test_the_pilot_flies_the_team_with_buttons_keys_and_sticks(pilot, demo: Demo
         pilot.screenshot(path=str(ROOT / "docs" / "screenshot.png"))
 
 
-def test_a_second_viewer_watches_until_it_takes_control(pilot, browser, demo: Demo) -> None:
-    viewer = open_page(browser, demo)
+def test_a_second_viewer_watches_until_it_takes_control(pilot, viewer, demo: Demo) -> None:
     assert banner(viewer).startswith("View only")
     assert viewer.get_by_role("button", name="land", exact=True).is_disabled()
     assert viewer.locator("[data-gcs-off] [data-gcs-pad=move]").count() == 1
@@ -402,9 +559,82 @@ def test_a_second_viewer_watches_until_it_takes_control(pilot, browser, demo: De
     assert operator(pilot)["right"] == 0.0
     pilot.keyboard.up("d")
 
-    # any viewer may abort, even one without control
-    pilot.get_by_role("button", name="ABORT: hold, then land").click()
-    wait_for(lambda: text(pilot, "phase") in ("aborting", "landing", "landed"), 10, "abort")
+
+SMALL = {"width": 1024, "height": 600}
+"""A small window: the scene between two panels, or the panels collapsed."""
+
+
+def aborts(page) -> list[float]:  # type: ignore[no-untyped-def]
+    """When the page's events list says the flight went into abort, s."""
+    return [float(t) for t in re.findall(r"([0-9.]+) s phase: aborting", text(page, "events"))]
+
+
+def test_the_abort_stays_in_view_and_any_viewer_aborts(pilot, viewer, demo: Demo,
+                                                       screens: Path) -> None:
+    """The pilot's page (without control now) at 1024x600, both panels collapsed: its red
+    ABORT is on screen and on top, and pressing it aborts while the holder still holds a
+    key: the team stops and lands. The panel's own ABORT, expanded again, is handled too."""
+    # the holder steers east at once (back from the west the last test flew to, away
+    # from the geofence, whose breach would freeze and abort by itself) and keeps D held
+    keyboard = viewer.keyboard
+    keyboard.down("d")
+    try:
+        commanded(viewer, "right", lambda v: v > 0.9, "right > 0.9 while D is held")()
+        pilot.set_viewport_size(SMALL)
+        abort = pilot.locator("[data-gcs=abort]")
+
+        def in_view() -> None:
+            box = abort.bounding_box()
+            assert box is not None and abort.is_visible(), "no ABORT on the page"
+            assert (box["x"] >= 0 and box["y"] >= 0
+                    and box["x"] + box["width"] <= SMALL["width"]
+                    and box["y"] + box["height"] <= SMALL["height"]), f"ABORT at {box}: off"
+            on_top = pilot.evaluate("([x, y]) => document.elementFromPoint(x, y).dataset.gcs",
+                                    [box["x"] + box["width"] / 2, box["y"] + box["height"] / 2])
+            assert on_top == "abort", f"ABORT at {box} is covered"
+
+        in_view()
+        panel_abort = pilot.get_by_role("button", name="ABORT: hold, then land")
+        for side in ("right", "left"):
+            pilot.locator(f"[data-dock-region-collapse={side}]").click()
+        wait_for(lambda: panel_abort.count() == 0, 5, "the control panel collapsed")
+        in_view()
+        shot = screens / "abort-panels-collapsed.png"
+        pilot.screenshot(path=str(shot))
+        print(f"small window, panels collapsed: {shot}")
+
+        # the team flies east, well inside the geofence; the pilot's page aborts
+        wait_for(lambda: demo.velocity()[1] > 0.05, 10, "the team flying east with D held",
+                 lambda: situation(viewer, demo))
+        moving = demo.velocity()
+        where = np.asarray(demo.sample().vehicle_p_ned)
+        centre = where.mean(axis=0)
+        assert np.abs(where[:, :2]).max() < 3.7, f"vehicles at {where}: at the geofence (4 m)"
+        abort.click()
+        wait_for(lambda: bool(aborts(viewer)), 5, "phase: aborting among the events",
+                 lambda: situation(viewer, demo))
+        first = max(aborts(viewer))
+        time.sleep(3.0)
+        held = demo.velocity()
+    finally:
+        keyboard.up("d")
+    speed, still = float(np.linalg.norm(moving)), float(np.linalg.norm(held))
+    print(f"abort with D held at {centre[:2]} m: team speed {speed:.3f} -> {still:.3f} m/s "
+          "in 3 s")
+    assert still < 0.1 and still < 0.5 * speed, (
+        f"the team still moves at {held} m/s 3 s after the abort; {situation(viewer, demo)}")
+    wait_for(lambda: text(viewer, "phase") in ("landing", "landed"), 10,
+             "landing after the abort's hold", lambda: situation(viewer, demo))
+
+    # the control panel's ABORT, back in view, is handled for a viewer without control too:
+    # a second abort while landing, or (the team already down) the refusal saying why
+    expand = pilot.locator('[aria-label="Expand column"]')
+    boxes = [expand.nth(k).bounding_box() for k in range(expand.count())]
+    expand.nth(max(range(len(boxes)), key=lambda k: boxes[k]["x"])).click()  # the right one
+    panel_abort.click()
+    refused = pilot.get_by_text("cannot abort while landed")
+    wait_for(lambda: any(t > first for t in aborts(viewer)) or refused.count() > 0, 5,
+             "the panel's abort handled", lambda: situation(viewer, demo))
 
 
 def test_ctrl_c_stops_the_demo_and_its_simulator(demo: Demo) -> None:
