@@ -23,14 +23,10 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import IO, cast
 
-import msgspec
 import numpy as np
 import pytest
 import viser
-import zstandard
 from viser import _messages as viser_messages
-from websockets.exceptions import ConnectionClosed
-from websockets.sync.client import connect
 
 from gcs.flightlog import FlightLog
 from gcs.link.dialect import mavlink
@@ -46,6 +42,7 @@ from web.panel import ControlPanel
 from web.replay import ReplayCursor
 from web.replay_page import ReplayUi, replay_summary_html
 from web.timeline import Timeline
+from web.wireviewer import WireViewer
 
 TIMELINE = {"Play", "Pause", "Speed", "Time (s)", "Event", "Jump to event", "Previous event",
             "Next event"}
@@ -57,9 +54,9 @@ def flight(short_flight: tuple[dict, Path]) -> Path:
     return short_flight[1]
 
 
-class PageViewer:
-    """A websocket viewer of a viser page: decodes what the page sends it, as the browser
-    does, and clicks buttons and picks dropdown values as the browser does.
+class PageViewer(WireViewer):
+    """A websocket viewer of a viser page (:class:`web.wireviewer.WireViewer`) that also keeps
+    the GUI it is sent, and clicks buttons and picks dropdown values as the browser does.
 
     ``widgets`` holds every GUI element the viewer was sent, by id: its message type
     and its properties (label, options, content...) with every later update applied.
@@ -67,35 +64,11 @@ class PageViewer:
 
     def __init__(self, port: int) -> None:
         self.widgets: dict[str, dict[str, object]] = {}
-        self._lock = threading.Lock()
-        self._stop = threading.Event()
-        self._ws = connect(f"ws://127.0.0.1:{port}",
-                           subprotocols=[f"viser-v{viser.__version__}"], max_size=None)
-        self._thread = threading.Thread(target=self._read, daemon=True)
-        self._thread.start()
-        camera = viser_messages.ViewerCameraMessage(  # viser counts a viewer once it has one
-            wxyz=(1.0, 0.0, 0.0, 0.0), position=(-3.0, -1.0, -2.0), fov=1.0, near=0.01,
-            far=1000.0, image_height=600, image_width=800, look_at=(0.0, 0.0, 0.0),
-            up_direction=(0.0, 0.0, -1.0))
-        self._send(camera)
+        super().__init__(port)
+        self.report_camera((-3.0, -1.0, -2.0), (0.0, 0.0, 0.0))  # viser counts it then
 
-    def _read(self) -> None:
-        unpack = zstandard.ZstdDecompressor()
-        while not self._stop.is_set():
-            try:
-                raw = self._ws.recv(timeout=0.1)
-            except TimeoutError:
-                continue
-            except ConnectionClosed:
-                return
-            assert isinstance(raw, bytes)
-            size, packed = (int.from_bytes(raw[k : k + 8], "little") for k in (0, 8))
-            inner = unpack.decompress(raw[16 : 16 + packed], max_output_size=size)
-            with self._lock:
-                for m in msgspec.msgpack.decode(inner)["messages"]:
-                    self._take(m)
-
-    def _take(self, m: dict) -> None:
+    def _apply(self, m: dict) -> None:
+        super()._apply(m)
         kind = m["type"]
         if kind.startswith("Gui") and "props" in m and "uuid" in m:
             self.widgets[m["uuid"]] = {"type": kind, "value": m.get("value"), **m["props"]}
@@ -103,9 +76,6 @@ class PageViewer:
             self.widgets[m["uuid"]].update(m["updates"])
         elif kind == "GuiRemoveMessage":
             self.widgets.pop(m["uuid"], None)
-
-    def _send(self, message: viser_messages.Message) -> None:
-        self._ws.send(msgspec.msgpack.encode(message.as_serializable_dict()))
 
     def texts(self) -> set[str]:
         """Every label, option and HTML or Markdown text the viewer was sent (non-empty)."""
@@ -124,13 +94,13 @@ class PageViewer:
         return found
 
     def click(self, label: str) -> None:
-        self._send(viser_messages.GuiUpdateMessage(self.uuid(label), {"value": True}))
+        self.send(viser_messages.GuiUpdateMessage(self.uuid(label), {"value": True}))
 
     def choose(self, label: str, value: str) -> None:
-        self._send(viser_messages.GuiUpdateMessage(self.uuid(label), {"value": value}))
+        self.send(viser_messages.GuiUpdateMessage(self.uuid(label), {"value": value}))
 
     @staticmethod
-    def wait_for(what: Callable[[], bool], timeout: float = 10.0) -> bool:
+    def until(what: Callable[[], bool], timeout: float = 10.0) -> bool:
         """Whether ``what`` came true within ``timeout`` seconds (the page answers a
         viewer on viser's threads)."""
         deadline = time.monotonic() + timeout
@@ -140,7 +110,7 @@ class PageViewer:
             time.sleep(0.02)
         return True
 
-    def settled(self, quiet: float = 0.5, timeout: float = 30.0) -> set[str]:
+    def settled_texts(self, quiet: float = 0.5, timeout: float = 30.0) -> set[str]:
         """:meth:`texts` once nothing new arrived for ``quiet`` seconds; fails if the page
         still changes after ``timeout`` seconds (a page that never rests would hang the test)."""
         deadline = time.monotonic() + timeout
@@ -152,17 +122,12 @@ class PageViewer:
             time.sleep(quiet)
         return now
 
-    def close(self) -> None:
-        self._stop.set()
-        self._ws.close()
-        self._thread.join(timeout=2.0)
-
 
 @contextmanager
 def viewer_of(port: int, timeout: float = 10.0) -> Iterator[PageViewer]:
     viewer = PageViewer(port)
     try:
-        assert viewer.wait_for(lambda: bool(viewer.widgets), timeout), "the page sent nothing"
+        assert viewer.until(lambda: bool(viewer.widgets), timeout), "the page sent nothing"
         yield viewer
     finally:
         viewer.close()
@@ -246,7 +211,7 @@ def test_the_waits_on_a_page_and_a_process_end() -> None:
     try:
         with viewer_of(server.get_port()) as viewer, \
                 pytest.raises(pytest.fail.Exception, match="the page kept changing for 2 s"):
-            viewer.settled(timeout=2.0)
+            viewer.settled_texts(timeout=2.0)
     finally:
         stop.set()
         ticker.join()
@@ -413,14 +378,14 @@ def test_replay_command_serves_the_page_without_controls(flight: Path,
             client, cast(OperatorActions, object()), ControlLock(),
             on_control_change=lambda: None))
         with viewer_of(live.get_port()) as viewer:
-            controls = viewer.settled()
+            controls = viewer.settled_texts()
     finally:
         live.stop()
     assert {"ABORT: hold, then land", "Take control", "guidance on"} <= controls
     assert any("data-gcs-pad" in text for text in controls)  # the sticks
 
     with served(flight) as (port, lines), viewer_of(port) as viewer:
-        page = viewer.settled()
+        page = viewer.settled_texts()
     assert page >= TIMELINE
     assert not page & controls, page & controls
     assert not any("data-gcs-pad" in text for text in page)
@@ -445,7 +410,7 @@ def test_replay_of_a_damaged_log_says_what_could_not_be_read(flight: Path, tmp_p
     assert note is not None
     with served(bad) as (port, lines), viewer_of(port) as viewer:
         shown = f"damaged log: {html_lib.escape(note)}</li>"
-        assert viewer.wait_for(lambda: any('data-gcs="missing"' in t and shown in t
+        assert viewer.until(lambda: any('data-gcs="missing"' in t and shown in t
                                     for t in viewer.texts()))
     assert lines[1:] == [f"note: {note}", "stopping…"]
     if damage == "cut":
@@ -481,11 +446,11 @@ def test_a_viewer_steps_and_jumps_through_the_events(flight: Path, tmp_path: Pat
         k = events.index(change)
         with viewer_of(ui.server.get_port()) as viewer:
             viewer.choose("Speed", "4x")
-            viewer.wait_for(lambda: ui.timeline.speed == 4.0)
+            viewer.until(lambda: ui.timeline.speed == 4.0)
             assert ui.timeline.speed == 4.0
 
             def lands_on(t: float) -> None:
-                viewer.wait_for(lambda: ui.timeline.t == t)
+                viewer.until(lambda: ui.timeline.t == t)
                 assert ui.timeline.t == t
 
             def pick(ending: str) -> None:
@@ -495,7 +460,7 @@ def test_a_viewer_steps_and_jumps_through_the_events(flight: Path, tmp_path: Pat
 
             pick("phase: formation")
             lands_on(change.t)  # exactly the tick where the phase changed
-            assert viewer.wait_for(lambda: any(  # and the viewer is shown that tick's phase
+            assert viewer.until(lambda: any(  # and the viewer is shown that tick's phase
                 'data-gcs="phase" style="font-size:1.2em">formation<' in t
                 for t in viewer.texts()))
             viewer.click("Next event")
@@ -512,7 +477,7 @@ def test_a_viewer_steps_and_jumps_through_the_events(flight: Path, tmp_path: Pat
             pick("rope snag")
             lands_on(warn_t)
             warned = re.compile(r'<div style="color:#e67e22"><span[^>]*>[^<]*</span> 2: rope snag<')
-            assert viewer.wait_for(lambda: any(warned.search(t) for t in viewer.texts()))
+            assert viewer.until(lambda: any(warned.search(t) for t in viewer.texts()))
     finally:
         ui.close()
 

@@ -186,13 +186,16 @@ class WireViewer(SceneRecord):
             assert isinstance(data, bytes)
             self.take(data, time.monotonic())
 
+    def send(self, message: viser_messages.Message) -> None:
+        """Send the page one message, as a browser does (a camera, a GUI value...)."""
+        self._ws.send(msgspec.msgpack.encode(message.as_serializable_dict()))
+
     def report_camera(self, position: tuple[float, float, float],
                       look_at: tuple[float, float, float]) -> None:
         """Report a camera as a browser does (viser counts a viewer once it has one)."""
-        message = viser_messages.ViewerCameraMessage(
+        self.send(viser_messages.ViewerCameraMessage(
             wxyz=(1.0, 0.0, 0.0, 0.0), position=position, fov=1.0, near=0.01, far=1000.0,
-            image_height=600, image_width=800, look_at=look_at, up_direction=(0.0, 0.0, -1.0))
-        self._ws.send(msgspec.msgpack.encode(message.as_serializable_dict()))
+            image_height=600, image_width=800, look_at=look_at, up_direction=(0.0, 0.0, -1.0)))
 
     def settled(self, quiet: float = 0.4) -> int:
         """Bytes received once nothing more arrived for ``quiet`` seconds."""
