@@ -19,9 +19,12 @@ The mapping from SDL axis and button numbers is a YAML file
   sticks it held deflected; the abort button works always, as in every browser.
 * Fault tolerant: an exception from pygame or from a callback (the abort's
   included) is reported once per distinct fault (``on_fault``, e.g. the page's
-  events, and the log) and the thread reads on; a pad that cannot be read is
-  treated as unplugged (its sticks centred). One bad event must not leave the
-  pilot without the abort button for the rest of the flight.
+  events, and the log) and the thread reads on. A pad whose axes cannot be
+  read has its sticks centred but is kept, buttons and all: its axes are
+  tried again every :data:`AXES_RETRY_S` (dropping the pad instead threw away
+  every button press, the abort's included, while it was being reopened).
+  One bad event must not leave the pilot without the abort button for the
+  rest of the flight.
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ from __future__ import annotations
 import logging
 import os
 import threading
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -38,6 +42,8 @@ from gcs.operator import OperatorCommand
 from gcs.typed_config import field, from_mapping, load_yaml
 
 __all__ = [
+    "AXES_RETRY_S",
+    "MAX_FAULTS_REPORTED",
     "AxisMap",
     "Gamepad",
     "GamepadAxes",
@@ -189,16 +195,20 @@ class GamepadMapper:
         elif number == b.guidance_off:
             self._operator.set_guidance(False)
 
-    def lost(self) -> None:
-        """The pad went away: centre the sticks if it was steering."""
+    def lost(self, why: str = "unplugged") -> None:
+        """The pad (or its axes: ``why``) went away: centre the sticks if it was steering."""
         if self._active:
-            self._operator.release(now=self._clock.now(), source=f"{SOURCE} unplugged")
+            self._operator.release(now=self._clock.now(), source=f"{SOURCE} {why}")
             self._active = False
 
 
 MAX_FAULTS_REPORTED = 20
 """Distinct faults reported per reader; past this they are counted only (a fault that
 changes its text every poll must not flood the page's events or the log)."""
+
+AXES_RETRY_S = 1.0
+"""After the axes failed to read, how long the reader leaves them before it tries again, s
+(the buttons are read meanwhile; a pad whose axes always fail is one fault a second)."""
 
 
 class Gamepad:
@@ -236,7 +246,7 @@ class Gamepad:
         self._thread = threading.Thread(target=self._run, daemon=True, name="gamepad")
         self._pad = None  # the pygame Joystick in use
         self._pad_id = -1
-        self._rescan = False  # look for a pad at the next poll (dropped after a fault)
+        self._axes_retry_at: float | None = None  # monotonic; set while the axes fail
         self.name: str | None = None
         """Name of the pad in use, None while there is none."""
 
@@ -287,22 +297,19 @@ class Gamepad:
                 self._event(pygame, event)
             except Exception as exc:
                 self._fault(f"handling {_event_name(pygame, event)}", exc)
-        if self._pad is None and self._rescan:  # dropped after a fault: take it back
-            self._rescan = False
-            try:
-                self._reopen(pygame)
-            except Exception as exc:
-                self._fault("opening the pad", exc)
         pad = self._pad
-        if pad is None:
+        now = time.monotonic()
+        if pad is None or (self._axes_retry_at is not None and now < self._axes_retry_at):
             return
         try:
             axes = [pad.get_axis(k) for k in range(pad.get_numaxes())]
-        except Exception as exc:  # as if unplugged; looked for again at the next poll
+        except Exception as exc:  # sticks centred, the pad and its buttons kept
             self._fault("reading the axes", exc)
-            self._drop_pad()
-            self._rescan = True
+            if self._axes_retry_at is None:
+                self._centre("axes failing")
+            self._axes_retry_at = now + AXES_RETRY_S
             return
+        self._axes_retry_at = None
         try:
             self.mapper.axes(axes, period)
         except Exception as exc:
@@ -324,8 +331,12 @@ class Gamepad:
     def _drop_pad(self) -> None:
         """Forget the pad in use and centre its sticks."""
         self._pad, self._pad_id, self.name = None, -1, None
+        self._centre("unplugged")
+
+    def _centre(self, why: str) -> None:
+        """Centre the sticks the pad held (``why``: the source shown); never raises."""
         try:
-            self.mapper.lost()
+            self.mapper.lost(why)
         except Exception as exc:
             self._fault("centring the sticks", exc)
 
@@ -352,6 +363,7 @@ class Gamepad:
             return False
         pad.init()
         self._pad, self._pad_id, self.name = pad, pad.get_instance_id(), pad.get_name()
+        self._axes_retry_at = None  # a new pad: read its axes at once
         _log.info("gamepad %s: %d axes, %d buttons", self.name, pad.get_numaxes(),
                   pad.get_numbuttons())
         return True

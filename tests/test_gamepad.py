@@ -15,6 +15,7 @@ import re
 import signal
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -23,7 +24,13 @@ import pytest
 
 from gcs.clock import WallClock
 from gcs.config import OperatorConfig, load_team
-from gcs.gamepad import Gamepad, GamepadConfig, GamepadMapper, load_gamepad_config
+from gcs.gamepad import (
+    AXES_RETRY_S,
+    Gamepad,
+    GamepadConfig,
+    GamepadMapper,
+    load_gamepad_config,
+)
 from gcs.operator import OperatorCommand
 from gcs.simprocess import free_tcp_port
 from gcs.typed_config import ConfigError, from_mapping
@@ -298,6 +305,25 @@ class Failing:
         return self.inner(*args, **kwargs)
 
 
+def faulty_axes(pygame, check: Callable[[int], object]) -> Callable[[int], object]:  # type: ignore[no-untyped-def]
+    """pygame's real Joystick class, but every axis read first calls ``check(axis)``,
+    which may raise (as a pad's failing axis read does)."""
+    real_joystick = pygame.joystick.Joystick
+
+    class Joystick:
+        def __init__(self, index: int) -> None:
+            self._real = real_joystick(index)
+
+        def get_axis(self, axis: int) -> float:
+            check(axis)
+            return float(self._real.get_axis(axis))
+
+        def __getattr__(self, name: str) -> object:
+            return getattr(self._real, name)
+
+    return Joystick
+
+
 def test_a_failing_callback_or_pygame_call_does_not_end_the_reader(
         monkeypatch: pytest.MonkeyPatch) -> None:
     """The abort callback, pygame's event queue and an axis read each raise once: every
@@ -331,25 +357,10 @@ def test_a_failing_callback_or_pygame_call_does_not_end_the_reader(
         eventually(lambda: broken.calls > 2, "the reader to poll past the fault")
         assert faults[-1] == "gamepad: reading events failed: error: event queue broke"
 
-        real_joystick = pygame.joystick.Joystick
         axis_fault = Failing(pygame.error("device gone"), inner=None)  # type: ignore[arg-type]
-
-        class FlakyJoystick:
-            """The real joystick whose next axis read fails once."""
-
-            def __init__(self, index: int) -> None:
-                self._real = real_joystick(index)
-
-            def get_axis(self, axis: int) -> float:
-                if axis_fault.left > 0:
-                    axis_fault(axis)
-                return float(self._real.get_axis(axis))
-
-            def __getattr__(self, name: str) -> object:
-                return getattr(self._real, name)
-
-        monkeypatch.setattr(pygame.joystick, "Joystick", FlakyJoystick)
-        device.unplug()  # plugged back in: opened through the flaky wrapper
+        monkeypatch.setattr(pygame.joystick, "Joystick", faulty_axes(
+            pygame, lambda axis: axis_fault(axis) if axis_fault.left > 0 else None))
+        device.unplug()  # plugged back in: opened through the faulty wrapper (fails once)
         eventually(lambda: pad.name is None, "the pad to be gone")
         device = VirtualPad(sdl)
         eventually(lambda: axis_fault.calls == 1, "the failing axis read")
@@ -360,6 +371,56 @@ def test_a_failing_callback_or_pygame_call_does_not_end_the_reader(
         assert len(faults) == 3 and pad.faults == 4  # the abort's twice, reported once
         device.button(1, True)
         eventually(lambda: len(aborts) == 2, "the abort after all three faults")
+    finally:
+        device.unplug()
+        pad.close()
+
+
+def test_a_pad_whose_axes_keep_failing_still_aborts(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every axis read raises: the sticks it held are centred, the fault is reported once
+    (and retried once a second, not every poll), and its buttons, the abort's first, still
+    act; once the axes read again, it steers."""
+    os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+    sdl = _sdl()
+    import pygame
+
+    broken = threading.Event()
+
+    def check(_axis: int) -> None:
+        if broken.is_set():
+            raise pygame.error("axis read failed")
+
+    monkeypatch.setattr(pygame.joystick, "Joystick", faulty_axes(pygame, check))
+    op, clock = operator()
+    aborts: list[float] = []
+    faults: list[str] = []
+    pad = Gamepad(load_gamepad_config(MAPPING), op, clock,
+                  on_abort=lambda: aborts.append(clock.now()), on_fault=faults.append)
+    pad.start()
+    device = VirtualPad(sdl)
+    try:
+        eventually(lambda: pad.name is not None, "the pad to be picked up")
+        device.axis(4, -1.0)  # forward
+        eventually(lambda: op.snapshot(clock.now()).demand.forward > 0.99, "forward")
+        broken.set()
+        since = time.monotonic()
+        eventually(lambda: op.snapshot(clock.now()).source == "gamepad axes failing",
+                   "the sticks centred")
+        assert op.snapshot(clock.now()).demand.forward == 0.0
+        for presses in (1, 2, 3):  # B, pressed and released three times: three aborts
+            device.button(1, True)
+            eventually(lambda n=presses: len(aborts) == n, f"abort {presses}")
+            device.button(1, False)
+            time.sleep(0.1)  # a few polls: SDL sees the release before the next press
+        device.button(5, True)  # RB: grow, as the other buttons
+        eventually(lambda: op.snapshot(clock.now()).scale_target > 1.0, "scale step")
+        device.button(5, False)
+        assert pad.name is not None
+        assert faults == ["gamepad: reading the axes failed: error: axis read failed"]
+        assert pad.faults <= 2 + (time.monotonic() - since) / AXES_RETRY_S, pad.faults
+        broken.clear()
+        eventually(lambda: op.snapshot(clock.now()).demand.forward > 0.99,
+                   "forward once the axes read again", timeout=AXES_RETRY_S + 3.0)
     finally:
         device.unplug()
         pad.close()
