@@ -12,7 +12,10 @@
 * HOVER streams setpoints holding the shape with the payload on the ground.
 * LIFTING raises the team by the lift height; FORMATION is operator flight;
   SETTING_DOWN lowers the team until the payload rests, back to HOVER.
-* ABORTING freezes the motion (every vehicle holds) and then lands.
+* ABORTING freezes the motion (every vehicle holds) and then lands. An abort
+  while aborting or landing keeps the phase: a held key's auto-repeat or a
+  second viewer's press must neither restart the hold nor call a landing team
+  back up into the hold (landing is where every abort ends).
 * RESUME keeps the phase: it switches the vehicles that left the streaming mode
   on their own (a HOLD after a gap in the setpoints, a pilot's switch) back to
   it, so the frozen motion can go on.
@@ -91,10 +94,16 @@ _ALLOWED: dict[Action, tuple[frozenset[Phase], Phase | None]] = {  # None: stays
     Action.LAND: (frozenset({Phase.ARMED, Phase.HOVER, Phase.TAKING_OFF, Phase.ABORTING}),
                   Phase.LANDING),
     Action.ABORT: (frozenset(Phase) - {Phase.CONNECT, Phase.READY, Phase.LANDED},
-                   Phase.ABORTING),
+                   Phase.ABORTING),  # but stays in ABORTING and LANDING (_STAYS)
     Action.RESUME: (frozenset({Phase.HOVER, Phase.LIFTING, Phase.FORMATION,
                                Phase.SETTING_DOWN}), None),
 }
+
+
+_STAYS: dict[Action, frozenset[Phase]] = {
+    Action.ABORT: frozenset({Phase.ABORTING, Phase.LANDING}),
+}
+"""Phases where an allowed action keeps the phase: it is already where the action leads."""
 
 
 def next_phase(phase: Phase, action: Action) -> Phase:
@@ -104,4 +113,6 @@ def next_phase(phase: Phase, action: Action) -> Phase:
         options = ", ".join(sorted(p.text for p in allowed))
         raise PhaseError(f"cannot {action.text} while {phase.text} "
                          f"(possible when: {options})")
-    return phase if target is None else target
+    if target is None or phase in _STAYS.get(action, ()):
+        return phase
+    return target

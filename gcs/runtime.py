@@ -260,19 +260,21 @@ class Runtime:
             if phase is self._phase:
                 return
             self._phase = phase
+        self._announce(phase)
+
+    def _announce(self, phase: Phase) -> None:
+        """The event of a phase change (what the page's events and the tests look for)."""
         self._event("info", f"phase: {phase.text}")
 
     # -- operator actions ----------------------------------------------------------------
 
     def request(self, action: Action) -> None:
         """Start a phase action; returns at once. PhaseError if the phase does not allow it."""
+        if action is Action.ABORT:
+            self._abort()
+            return
         with self._lock:
             target = next_phase(self._phase, action)
-        if action is Action.ABORT:
-            self.operator.release(now=self.clock.now(), source="abort")
-            self._abort_at = self.clock.now()
-            self._set_phase(target)
-            return
         if action in (Action.LIFT, Action.SET_DOWN):
             # target altitude first: a tick between the two would find the old one
             # reached and end the phase at once
@@ -287,6 +289,24 @@ class Runtime:
         if not self._action_busy.acquire(blocking=False):
             raise PhaseError(f"cannot {action.text}: another action is still running")
         self.gate.submit(self._pool, self._run_action, action, target)
+
+    def _abort(self) -> None:
+        """Freeze the motion and start the hold, unless already aborting or landing.
+
+        The phase check and the hold's start are one step under the lock: aborts
+        arrive from several threads at once (every viewer, the gamepad, the safety
+        rules), and a repeated one must not restart the hold (phases.py). The
+        sticks are centred either way; a refused abort (PhaseError) changes nothing.
+        """
+        now = self.clock.now()
+        with self._lock:
+            target = next_phase(self._phase, Action.ABORT)
+            started = target is not self._phase
+            if started:
+                self._phase, self._abort_at = target, now
+        self.operator.release(now=now, source="abort")
+        if started:
+            self._announce(target)
 
     def _run_action(self, action: Action, target: Phase) -> None:
         try:

@@ -40,10 +40,13 @@ def test_resume_keeps_the_phase_and_only_applies_while_streaming_in_flight() -> 
 
 
 def test_abort_is_possible_whenever_something_can_fly() -> None:
+    """It holds then lands from any phase but its own two: aborting and landing stay."""
     for phase in Phase:
         if phase in (Phase.CONNECT, Phase.READY, Phase.LANDED):
             with pytest.raises(PhaseError):
                 next_phase(phase, Action.ABORT)
+        elif phase in (Phase.ABORTING, Phase.LANDING):
+            assert next_phase(phase, Action.ABORT) is phase
         else:
             assert next_phase(phase, Action.ABORT) is Phase.ABORTING
 

@@ -102,14 +102,26 @@ def test_killed_vehicle_is_reported_gone_and_the_team_lands(flying: GcsApp) -> N
 
 
 def test_abort_holds_then_lands(flying: GcsApp) -> None:
+    """Repeated aborts (a held key's auto-repeat, several viewers) neither restart the hold
+    nor call the landing team back into it."""
     app = flying
     hold_sticks(app, 1.0)
     app.runtime.request(Action.ABORT)
+    started = app.clock.now()
     assert app.runtime.phase is Phase.ABORTING
     sim_sleep(app, 0.5)
     assert app.runtime.snapshot.demand.forward == 0.0
-    sim_sleep(app, TEAM.config.flight.abort_hold + 1.0)
+    hold = TEAM.config.flight.abort_hold
+    while app.runtime.phase is Phase.ABORTING:  # aborts every 0.1 s all through the hold
+        assert app.clock.now() - started < hold + 0.5, "repeated aborts restart the hold"
+        app.runtime.request(Action.ABORT)
+        sim_sleep(app, 0.1)
+    assert app.clock.now() - started >= hold
+    assert app.runtime.phase is Phase.LANDING
+    app.runtime.request(Action.ABORT)  # landing is the abort's end: it lands on
+    sim_sleep(app, 0.5)
     assert app.runtime.phase in (Phase.LANDING, Phase.LANDED)
+    assert [e.text for e in app.runtime.events()].count("phase: aborting") == 1
 
 
 def test_a_vehicle_leaving_offboard_freezes_then_its_landing_lands_the_team(
