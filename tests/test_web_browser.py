@@ -6,8 +6,9 @@ second, independent zenoh session, so a test passes only if the real
 simulated vehicles moved. What each browser received over its websocket is
 decoded too (``web.wireviewer.SceneRecord``): the scene it holds and how many
 updates a second reach it. The tests share one demo and run in file order:
-fly from the page, then a second viewer, then the always-visible abort at a
-small window with the panels collapsed, then Ctrl-C. Screenshots go to the
+fly from the page, then a second viewer, then the abort (from the keyboard, and
+the always-visible button at a small window with the panels collapsed), then
+Ctrl-C, then the button of a page whose server is gone. Screenshots go to the
 pytest temporary directory (the path is printed; ``-s`` shows it).
 """
 
@@ -33,7 +34,9 @@ from gcs.link import keys
 from gcs.link.zenoh_session import ZenohSettings, open_session
 from gcs.simprocess import free_tcp_port
 from gcs.simtruth import SimTruth
+from tests.colours import hue_apart, hue_saturation_value
 from web import palette
+from web.browser_script import ABORT_ANSWERS
 from web.wireviewer import SceneRecord
 
 CHROMIUM = Path("/usr/bin/chromium")
@@ -295,23 +298,10 @@ def operator(page) -> dict[str, float | str]:  # type: ignore[no-untyped-def]
     return values
 
 
-def hue_saturation_value(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Hue (degrees), saturation and value (0..1) of (..., 3) colours in 0..255."""
-    c = np.asarray(rgb, dtype=float) / 255.0
-    r, g, b = c[..., 0], c[..., 1], c[..., 2]
-    top = c.max(axis=-1)
-    span = top - c.min(axis=-1)
-    safe = np.where(span > 0, span, 1.0)
-    hue = np.select([top == r, top == g], [((g - b) / safe) % 6.0, (b - r) / safe + 2.0],
-                    (r - g) / safe + 4.0)
-    return 60.0 * hue, np.where(top > 0, span / np.where(top > 0, top, 1.0), 0.0), top
-
-
 def near_hue(hue: np.ndarray, colour: tuple[int, int, int] | np.ndarray,
              within: float) -> np.ndarray:
     """Where ``hue`` is within ``within`` degrees of ``colour``'s hue."""
-    (own,), _, _ = hue_saturation_value(np.array([colour]))
-    return np.abs((hue - own + 180.0) % 360.0 - 180.0) <= within
+    return hue_apart(hue, colour) <= within
 
 
 GIZMO_PX = 120
@@ -572,11 +562,27 @@ def aborts(page) -> list[float]:  # type: ignore[no-untyped-def]
     return [float(t) for t in re.findall(r"([0-9.]+) s phase: aborting", text(page, "events"))]
 
 
+def abort_answers(page) -> tuple[int, str]:  # type: ignore[no-untyped-def]
+    """How many answers the page's overlay ABORT has had, and the latest ("sent",
+    "refused", "offline"; see web.browser_script.ABORT_ANSWERS)."""
+    count, latest = page.locator("[data-gcs=abort]").evaluate(
+        "a => [Number(a.dataset.gcsAnswers || 0), a.dataset.gcsAnswer || '']")
+    return int(count), str(latest)
+
+
 def test_the_abort_stays_in_view_and_any_viewer_aborts(pilot, viewer, demo: Demo,
                                                        screens: Path) -> None:
-    """The pilot's page (without control now) at 1024x600, both panels collapsed: its red
-    ABORT is on screen and on top, and pressing it aborts while the holder still holds a
-    key: the team stops and lands. The panel's own ABORT, expanded again, is handled too."""
+    """The holder, its focus still on the guidance checkbox it just clicked (where viser's
+    own hotkey listener ignores keys), aborts with Ctrl+Shift+X while it holds D: the team
+    stops and lands. The pilot's page (without control now) at 1024x600, both panels
+    collapsed: its red ABORT is on screen and on top, and pressed during the abort it is
+    answered "ABORT sent" by the server. The panel's own ABORT, expanded again, is
+    answered too, and the landing team is not called back into the abort's hold."""
+    # guidance off and on again: the checkbox keeps the focus (it takes no flight keys)
+    guidance = viewer.get_by_label("guidance on")
+    for shown in ("guidance off", "guidance on"):
+        guidance.click()
+        wait_for(lambda s=shown: s in text(viewer, "operator"), 5, f"{shown} shown")
     # the holder steers east at once (back from the west the last test flew to, away
     # from the geofence, whose breach would freeze and abort by itself) and keeps D held
     keyboard = viewer.keyboard
@@ -606,18 +612,29 @@ def test_the_abort_stays_in_view_and_any_viewer_aborts(pilot, viewer, demo: Demo
         pilot.screenshot(path=str(shot))
         print(f"small window, panels collapsed: {shot}")
 
-        # the team flies east, well inside the geofence; the pilot's page aborts
+        # the team flies east, well inside the geofence; the holder aborts from the keyboard
         wait_for(lambda: demo.velocity()[1] > 0.05, 10, "the team flying east with D held",
                  lambda: situation(viewer, demo))
         moving = demo.velocity()
         where = np.asarray(demo.sample().vehicle_p_ned)
         centre = where.mean(axis=0)
         assert np.abs(where[:, :2]).max() < 3.7, f"vehicles at {where}: at the geofence (4 m)"
-        abort.click()
-        wait_for(lambda: bool(aborts(viewer)), 5, "phase: aborting among the events",
-                 lambda: situation(viewer, demo))
+        assert guidance.evaluate("box => box === document.activeElement"), (
+            "the guidance checkbox lost the focus")
+        keyboard.press("Control+Shift+X")
+        aborted = time.monotonic()
+        wait_for(lambda: bool(aborts(viewer)), 5, "phase: aborting after Ctrl+Shift+X in the "
+                 "checkbox", lambda: situation(viewer, demo))
         first = max(aborts(viewer))
-        time.sleep(3.0)
+        # the pilot's overlay, pressed now: the server answers that it got it
+        answers = abort_answers(pilot)[0]
+        abort.click()
+        wait_for(lambda: abort_answers(pilot)[0] > answers, 5, "the overlay's abort answered",
+                 lambda: situation(viewer, demo))
+        said = abort.inner_text()
+        assert abort_answers(pilot)[1] == "sent" and said == ABORT_ANSWERS["sent"], (
+            f"overlay: {abort_answers(pilot)}, {said!r}")
+        time.sleep(max(0.0, 3.0 - (time.monotonic() - aborted)))
         held = demo.velocity()
     finally:
         keyboard.up("d")
@@ -629,15 +646,20 @@ def test_the_abort_stays_in_view_and_any_viewer_aborts(pilot, viewer, demo: Demo
     wait_for(lambda: text(viewer, "phase") in ("landing", "landed"), 10,
              "landing after the abort's hold", lambda: situation(viewer, demo))
 
-    # the control panel's ABORT, back in view, is handled for a viewer without control too:
-    # a second abort while landing, or (the team already down) the refusal saying why
+    # the control panel's ABORT, back in view, is answered for a viewer without control too:
+    # taken while landing (the team lands on), or (the team already down) refused, saying why
     expand = pilot.locator('[aria-label="Expand column"]')
     boxes = [expand.nth(k).bounding_box() for k in range(expand.count())]
     expand.nth(max(range(len(boxes)), key=lambda k: boxes[k]["x"])).click()  # the right one
+    answers = abort_answers(pilot)[0]
     panel_abort.click()
-    refused = pilot.get_by_text("cannot abort while landed")
-    wait_for(lambda: any(t > first for t in aborts(viewer)) or refused.count() > 0, 5,
-             "the panel's abort handled", lambda: situation(viewer, demo))
+    wait_for(lambda: abort_answers(pilot)[0] > answers, 5, "the panel's abort answered",
+             lambda: situation(viewer, demo))
+    if abort_answers(pilot)[1] == "refused":
+        pilot.get_by_text("cannot abort while landed").wait_for(timeout=5_000)
+    time.sleep(0.5)  # a tick or two: the landing team is not called back into the hold
+    assert not any(t > first for t in aborts(viewer)), situation(viewer, demo)
+    assert text(viewer, "phase") in ("landing", "landed"), situation(viewer, demo)
 
 
 def test_ctrl_c_stops_the_demo_and_its_simulator(demo: Demo) -> None:
@@ -646,3 +668,15 @@ def test_ctrl_c_stops_the_demo_and_its_simulator(demo: Demo) -> None:
     host, port = demo.endpoint.removeprefix("tcp/").rsplit(":", 1)
     with pytest.raises(OSError), socket.create_connection((host, int(port)), timeout=2):
         pass  # nothing listens on the simulator's endpoint any more
+
+
+def test_the_overlay_abort_says_not_connected_once_the_page_is_gone(pilot) -> None:  # type: ignore[no-untyped-def]
+    """The demo stopped: the page's websocket is down, viser drops what it would send, and
+    the overlay, above viser's "disconnected" layer, must not say "sent"."""
+    answers = abort_answers(pilot)[0]
+    abort = pilot.locator("[data-gcs=abort]")
+    abort.click()
+    wait_for(lambda: abort_answers(pilot)[0] > answers, 5, "the overlay's abort answered")
+    said = abort.inner_text()
+    assert abort_answers(pilot)[1] == "offline" and said == ABORT_ANSWERS["offline"], (
+        f"overlay: {abort_answers(pilot)}, {said!r}")

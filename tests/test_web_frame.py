@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import colorsys
 import dataclasses
 import math
 from pathlib import Path
@@ -14,6 +13,7 @@ from gcs.analysis import analyze
 from gcs.config import load_team
 from gcs.fleet import FleetState
 from gcs.simtruth import SimTruth
+from tests.colours import hue_apart, hue_saturation_value
 from web import palette
 from web.frame import LABEL_LIFT, TeamView, build_frame, rope_pull_estimate, vehicle_states
 from web.palette import VehicleState
@@ -63,12 +63,6 @@ def test_error_colours_are_symmetric_and_saturate() -> None:
     assert tuple(rgb[3]) == tuple(rgb[4]) == palette.BAD
 
 
-def _hue_saturation(rgb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Hue (degrees) and saturation of (..., 3) uint8 colours."""
-    hsv = np.array([colorsys.rgb_to_hsv(*(c / 255.0)) for c in np.reshape(rgb, (-1, 3))])
-    return 360.0 * hsv[:, 0], hsv[:, 1]
-
-
 def test_only_an_ok_vehicle_is_green_and_only_the_payload_magenta() -> None:
     """Every other colour of the scene, every step of every ramp included, is at least 30
     degrees of hue from both, or too grey to be mistaken (saturation below 0.3)."""
@@ -80,12 +74,11 @@ def test_only_an_ok_vehicle_is_green_and_only_the_payload_magenta() -> None:
         [palette.GHOST, palette.VELOCITY, palette.TRAIL, palette.UNKNOWN, palette.GEOFENCE,
          palette.PAYLOAD_ESTIMATED],
     ])
-    hue, saturation = _hue_saturation(others)
+    hue, saturation, _ = hue_saturation_value(others)
     for own in (palette.OK, palette.PAYLOAD):
-        (own_hue,), (own_saturation,) = _hue_saturation(np.array([own]))
+        (own_saturation,) = hue_saturation_value(np.array([own]))[1]
         assert own_saturation > 0.6
-        apart = np.abs((hue - own_hue + 180.0) % 360.0 - 180.0)
-        close = (apart < 30.0) & (saturation >= 0.3)
+        close = (hue_apart(hue, own) < 30.0) & (saturation >= 0.3)
         assert not close.any(), (own, others[close][:5])
     assert tuple(palette.state_colors(np.array([palette.VehicleState.OK]))[0]) == palette.OK
 

@@ -16,6 +16,7 @@ from web.browser_input import (
     parse_input,
 )
 from web.browser_script import (
+    ABORT_ANSWERS,
     ABORT_HOTKEY,
     ABORT_MODIFIER,
     CHANNEL_LABEL,
@@ -105,6 +106,9 @@ def test_the_script_is_configured_from_the_python_tables() -> None:
     assert (abort["key"], abort["ctrl"], abort["shift"], abort["alt"]) == (
         ABORT_HOTKEY, True, True, False)
     assert ABORT_MODIFIER == "cmd/ctrl+shift" and abort_keys() == "Ctrl+Shift+X"
+    # the keyboard's own presses are read by the physical key (any layout); the answers
+    # the button shows are the ones the server sends (answer_abort) or its silence
+    assert abort["code"] == "KeyX" and abort["answers"] == ABORT_ANSWERS
     assert abort_keys() in abort["title"]
     # the line the script writes is the one the server reads
     assert '"#" + st.seq + " keys=" +' in source and '" pad=" +' in source

@@ -20,6 +20,7 @@ from gcs.app import GcsApp
 from gcs.config import load_team
 from gcs.fleet import FleetState
 from gcs.link.zenoh_session import ZenohSettings
+from gcs.operator import OperatorCommand
 from gcs.simprocess import SimProcess, free_tcp_port
 from gcs.simtruth import SimTruth
 from web import palette
@@ -192,6 +193,31 @@ def test_following_the_team_keeps_the_viewers_angle_and_zoom(
         np.testing.assert_allclose(camera.look_at, np.add((0.5, 0.0, -1.0), delta), atol=1e-9)
         panel.follow_camera(centroid + 2 * delta + FOLLOW_STEP / 2)  # noise: stays put
         np.testing.assert_allclose(camera.look_at, np.add((0.5, 0.0, -1.0), delta), atol=1e-9)
+    finally:
+        viewer.close()
+
+
+def test_a_tick_never_undoes_the_viewers_click_on_guidance(server: viser.ViserServer) -> None:
+    """viser stores a click's value, then runs its callback on its thread pool; a tick that
+    rewrote the checkbox meanwhile from its snapshot (older than the click) made the callback
+    read the old value back, and the browser test's guidance stayed off. The checkbox is
+    written only when the operator's value changes (another source: the gamepad)."""
+    viewer = WireViewer(server.get_port())
+    try:
+        client = connected_client(server, viewer)
+        panel = ControlPanel(client, cast(OperatorActions, object()), ControlLock(),
+                             on_control_change=lambda: None)
+        op = OperatorCommand(TEAM.config.operator, TEAM.config.guidance)
+        before_click = op.snapshot(0.0)  # guidance on
+        panel.sync(before_click)
+        panel.guidance.value = False  # the viewer's click, its callback not run yet
+        panel.sync(before_click)  # a tick from before the click
+        assert panel.guidance.value is False
+        op.set_guidance(False)  # the callback; then the gamepad switches it back on
+        panel.sync(op.snapshot(0.0))
+        op.set_guidance(True)
+        panel.sync(op.snapshot(0.0))
+        assert panel.guidance.value is True
     finally:
         viewer.close()
 

@@ -21,7 +21,15 @@ for the viewer it came from (any viewer may abort). A key press rather than
 a GUI message because viser's page keeps no handle to send one through once
 the control panel is collapsed (its content leaves the page); the hotkey
 listener is the page's own, whatever its layout. Pressed on a keyboard, the
-same keys abort too.
+same keys abort too: the script takes them (the physical key, so any layout;
+auto-repeat ignored) and sends them on as the button does, because viser's
+listener (Mantine's ``useHotkeys``) skips key presses in form fields, a
+checkbox just clicked included.
+
+The button says "ABORT sent" only when the server answers (:func:`answer_abort`,
+for the viewer the abort came from, however it was pressed): while the
+websocket is down viser's page drops what it would send, and the button,
+above viser's "disconnected" layer, then says "NOT CONNECTED".
 
 It reports through the holder's read-only "browser input" text field, whose
 input it sets the way a user's typing would (native value setter plus an
@@ -32,8 +40,9 @@ move viser's camera as usual) and the pads do nothing.
 
 The script is shipped with viser's ``RunJavascriptMessage``, the mechanism
 ``GuiApi.add_plotly`` uses to load plotly.js; viser 1.1.1 has no public call
-for it, hence the one private import below. It is kept in the server's
-persistent messages, so viewers connecting later get it too.
+for it, hence the one private import below (and the same message, sent to one
+viewer, carries :func:`answer_abort`). It is kept in the server's persistent
+messages, so viewers connecting later get it too.
 """
 
 from __future__ import annotations
@@ -47,12 +56,15 @@ from viser import _messages as viser_messages
 from web.browser_input import HOTKEYS, INPUT_TIMEOUT, STEP_ACTIONS
 
 __all__ = [
+    "ABORT_ANSWERS",
+    "ABORT_ANSWER_WAIT_MS",
     "ABORT_HOTKEY",
     "ABORT_LABEL",
     "ABORT_MODIFIER",
     "CHANNEL_LABEL",
     "SEND_PERIOD_MS",
     "abort_keys",
+    "answer_abort",
     "install_script",
     "pads_html",
     "script_source",
@@ -68,9 +80,19 @@ ABORT_LABEL = "ABORT: hold, then land"
 """The abort's name, on the panel's button and in viser's command palette."""
 
 ABORT_HOTKEY: Literal["X"] = "X"
+"""The abort command's key (viser command hotkey), pressed with :data:`ABORT_MODIFIER`;
+the overlay button presses it, and the script reads it as the physical key ``KeyX``."""
+
 ABORT_MODIFIER: Literal["cmd/ctrl+shift"] = "cmd/ctrl+shift"
-"""The abort's key (viser command hotkey): Ctrl+Shift+X (Cmd+Shift+X on a Mac); the
-overlay button presses it. Modifiers, so that no stray key aborts a flight."""
+"""The abort's modifiers: Ctrl+Shift+X (Cmd+Shift+X on a Mac). Two of them, so that no
+stray key aborts a flight."""
+
+ABORT_ANSWERS = {"sent": "ABORT sent", "refused": "ABORT refused", "offline": "NOT CONNECTED"}
+"""What the overlay button says after an abort: the server took it, the phase refused it
+(the viewer is told why in a notification), or no answer came (nothing was sent)."""
+
+ABORT_ANSWER_WAIT_MS = 2000
+"""How long the button waits for the server's answer before it says "NOT CONNECTED"."""
 
 _SCRIPT = r"""
 (() => {
@@ -122,6 +144,17 @@ _SCRIPT = r"""
   const editable = (t) => t && (t.isContentEditable || /^(TEXTAREA|SELECT)$/.test(t.tagName) ||
     (t.tagName === "INPUT" && /^(text|search|number|email|password|tel|url)$/.test(t.type)));
   const keyName = (e) => (e.key.length === 1 ? e.key.toLowerCase() : e.key);
+  // the abort's keys: viser's hotkey skips a press in a form field (a clicked checkbox
+  // too), so the script sends every real one the way the button does (the physical key:
+  // any layout); the button's own synthetic press goes on to viser
+  const abortKeys = (e) => e.code === CFG.abort.code && e.shiftKey && (e.ctrlKey || e.metaKey) &&
+    !e.altKey;
+  window.addEventListener("keydown", (e) => {
+    if (!e.isTrusted || !abortKeys(e)) return;
+    e.preventDefault();
+    e.stopPropagation();
+    if (!e.repeat) sendAbort();
+  }, true);
   window.addEventListener("keydown", (e) => {
     if (editable(e.target) || e.ctrlKey || e.metaKey || e.altKey) return;
     const action = CFG.keys[keyName(e)];
@@ -212,16 +245,34 @@ _SCRIPT = r"""
   abort.title = CFG.abort.title;
   abort.setAttribute("aria-label", CFG.abort.aria);
   abort.style.cssText = CFG.abort.style;
-  abort.addEventListener("click", () => {
-    const key = {key: CFG.abort.key, code: "Key" + CFG.abort.key, ctrlKey: CFG.abort.ctrl,
+  function show(text, ms) {
+    abort.textContent = text;
+    clearTimeout(abort.gcsTimer);
+    abort.gcsTimer = setTimeout(() => { abort.textContent = CFG.abort.text; }, ms);
+  }
+  // "sent" only on the server's word (answer_abort): a press while the websocket is
+  // down is dropped by viser's page with a line in the console, nothing more
+  function answered(outcome) {
+    clearTimeout(st.abortWait);
+    st.abortWait = null;
+    abort.dataset.gcsAnswer = outcome;
+    abort.dataset.gcsAnswers = String(Number(abort.dataset.gcsAnswers || 0) + 1);
+    show(CFG.abort.answers[outcome], CFG.abort.shown);
+  }
+  st.abortAnswer = answered;
+  function sendAbort() {
+    const key = {key: CFG.abort.key, code: CFG.abort.code, ctrlKey: CFG.abort.ctrl,
                  shiftKey: CFG.abort.shift, altKey: CFG.abort.alt, bubbles: true,
                  cancelable: true};
     document.body.dispatchEvent(new KeyboardEvent("keydown", key));
     document.body.dispatchEvent(new KeyboardEvent("keyup", key));
+    show(CFG.abort.sending, CFG.abort.wait + CFG.abort.shown);
+    clearTimeout(st.abortWait);
+    st.abortWait = setTimeout(() => answered("offline"), CFG.abort.wait);
+  }
+  abort.addEventListener("click", () => {
     abort.blur();  // Space or Enter later must not press it again
-    abort.textContent = CFG.abort.sent;
-    clearTimeout(abort.gcsTimer);
-    abort.gcsTimer = setTimeout(() => { abort.textContent = CFG.abort.text; }, 1500);
+    sendAbort();
   });
   document.body.appendChild(abort);
 })();
@@ -280,15 +331,25 @@ def script_source() -> str:
         "steps": list(STEP_ACTIONS),
         "period": SEND_PERIOD_MS,
         "linger": int(INPUT_TIMEOUT * 1000),
-        "abort": {"key": ABORT_HOTKEY, "ctrl": "cmd/ctrl" in modifiers,
-                  "shift": "shift" in modifiers, "alt": "alt" in modifiers,
-                  "text": "ABORT", "sent": "ABORT sent",
+        "abort": {"key": ABORT_HOTKEY, "code": f"Key{ABORT_HOTKEY}",
+                  "ctrl": "cmd/ctrl" in modifiers, "shift": "shift" in modifiers,
+                  "alt": "alt" in modifiers, "text": "ABORT", "sending": "ABORT …",
+                  "answers": ABORT_ANSWERS, "wait": ABORT_ANSWER_WAIT_MS, "shown": 2500,
                   "aria": "ABORT (always shown): hold, then land",
                   "title": "Abort: the team stops, holds, then lands. Any viewer may; "
                            f"{abort_keys()} does the same.",
                   "style": _ABORT_STYLE},
     }
     return _SCRIPT.replace("__CONFIG__", json.dumps(config))
+
+
+def answer_abort(client: viser.ClientHandle, *, accepted: bool) -> None:
+    """Tell ``client``'s page the server got its abort (``accepted``, or the phase refused
+    it): its overlay button says "ABORT sent" on this answer alone."""
+    outcome = json.dumps("sent" if accepted else "refused")
+    client._websock_connection.queue_message(  # no public API in viser 1.1.1
+        viser_messages.RunJavascriptMessage(
+            source=f"window.__gcsInput && window.__gcsInput.abortAnswer({outcome});"))
 
 
 def install_script(server: viser.ViserServer) -> None:

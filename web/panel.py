@@ -15,14 +15,14 @@ from collections.abc import Callable
 import numpy as np
 import viser
 
+from gcs.operator import OperatorSnapshot
 from gcs.phases import Action
-from gcs.runtime import RuntimeSnapshot
 from web.actions import OperatorActions
 from web.browser_input import InputTracker, parse_input
-from web.browser_script import ABORT_LABEL, CHANNEL_LABEL, pads_html
+from web.browser_script import ABORT_LABEL, CHANNEL_LABEL, answer_abort, pads_html
 from web.control import ControlLock
 
-__all__ = ["FOLLOW_STEP", "HOTKEY_HELP", "PHASE_BUTTONS", "ControlPanel"]
+__all__ = ["FOLLOW_STEP", "HOTKEY_HELP", "PHASE_BUTTONS", "ControlPanel", "abort_for"]
 
 PHASE_BUTTONS: dict[str, Action] = {
     "arm": Action.ARM, "take off": Action.TAKEOFF, "lift": Action.LIFT,
@@ -58,6 +58,20 @@ def _shift_camera(client: viser.ClientHandle, delta: np.ndarray) -> None:
         camera.look_at = look_at
 
 
+def _notify(client: viser.ClientHandle, title: str, body: str) -> None:
+    """Tell one viewer why its action did nothing."""
+    client.add_notification(title, body, color="red", auto_close_seconds=6.0)
+
+
+def abort_for(client: viser.ClientHandle, actions: OperatorActions) -> None:
+    """``client`` asked to abort (any viewer may, control or not): abort, answer its page
+    (the overlay says "sent" only then), and tell it why if the phase refuses."""
+    why = actions.request(Action.ABORT)
+    answer_abort(client, accepted=why is None)
+    if why is not None:
+        _notify(client, "Abort refused", why)
+
+
 class ControlPanel:
     """The controls of one connected browser.
 
@@ -91,8 +105,9 @@ class ControlPanel:
             self._channel = gui.add_text(CHANNEL_LABEL, "", disabled=True, visible=False, order=1,
                                          hint="What this page sends: held keys, step "
                                               "presses, stick positions.")
-            self._guidance = gui.add_checkbox("guidance on", True, disabled=True, order=_GUIDANCE,
-                                              hint="Off: the team holds its shape and place.")
+            self.guidance = gui.add_checkbox("guidance on", True, disabled=True, order=_GUIDANCE,
+                                             hint="Off: the team holds its shape and place.")
+            self._guidance_shown: bool | None = None  # the operator's, as last synced
             gui.add_markdown(HOTKEY_HELP, order=_HELP)
         self._fly = fly
         self._groups: dict[str, viser.GuiButtonGroupHandle] = {}
@@ -102,7 +117,7 @@ class ControlPanel:
         self._abort.on_click(self._on_abort)
         self._take.on_click(self._on_take)
         self._channel.on_update(self._on_channel)
-        self._guidance.on_update(self._on_guidance)
+        self.guidance.on_update(self._on_guidance)
 
     # -- state ---------------------------------------------------------------------------
 
@@ -125,7 +140,7 @@ class ControlPanel:
             self._take.label = "Release control" if mine else "Take control"
             self._pads.content = pads_html(enabled=mine)
             self._channel.visible = mine
-            self._guidance.disabled = not mine
+            self.guidance.disabled = not mine
             self._add_groups(enabled=mine)
         if not mine:
             self._tracker.reset()
@@ -150,9 +165,17 @@ class ControlPanel:
             return 0.0, 0.0, 0.0
         return self._tracker.sticks(wall=time.monotonic())
 
-    def sync(self, snap: RuntimeSnapshot) -> None:
-        """Show state another source may have changed (the gamepad switches guidance)."""
-        self._guidance.value = snap.operator.guidance_on
+    def sync(self, operator: OperatorSnapshot) -> None:
+        """Show state another source may have changed (the gamepad switches guidance).
+
+        Written only when the operator's value changed since the last tick, so a tick
+        never undoes a click: viser stores a click's value first and runs its callback
+        later, on its thread pool, and a tick in between that rewrote the checkbox from
+        its older snapshot made the callback read that value back (guidance stuck off).
+        """
+        if operator.guidance_on != self._guidance_shown:
+            self._guidance_shown = operator.guidance_on
+            self.guidance.value = operator.guidance_on
 
     def follow_camera(self, centroid: np.ndarray | None) -> None:
         """Move this viewer's camera with the team, keeping the viewer's own angle.
@@ -184,15 +207,9 @@ class ControlPanel:
     def _mine(self, event: viser.GuiEvent) -> bool:
         return event.client_id == self.id and self.holds
 
-    def _notify(self, title: str, body: str) -> None:
-        self.client.add_notification(title, body, color="red", auto_close_seconds=6.0)
-
     def abort(self) -> None:
-        """This viewer asked to abort (its panel's button, the overlay, the hotkey): any
-        viewer may, control or not; told why if the phase refuses."""
-        why = self._actions.request(Action.ABORT)
-        if why is not None:
-            self._notify("Abort refused", why)
+        """This viewer asked to abort (its panel's button, the overlay, the hotkey)."""
+        abort_for(self.client, self._actions)
 
     def _on_abort(self, event: viser.GuiEvent) -> None:
         if event.client_id == self.id:
@@ -232,11 +249,11 @@ class ControlPanel:
 
     def _on_guidance(self, event: viser.GuiEvent) -> None:
         if self._mine(event):
-            self._actions.set_guidance(bool(self._guidance.value))
+            self._actions.set_guidance(bool(self.guidance.value))
 
     def _on_phase(self, event: viser.GuiEvent) -> None:
         if not self._mine(event):
             return
         why = self._actions.request(PHASE_BUTTONS[event.target.value])
         if why is not None:
-            self._notify("Not now", why)
+            _notify(self.client, "Not now", why)

@@ -37,7 +37,7 @@ from web.browser_script import ABORT_HOTKEY, ABORT_LABEL, ABORT_MODIFIER, instal
 from web.control import ControlLock
 from web.frame import TeamView, build_frame
 from web.history import History
-from web.panel import ControlPanel
+from web.panel import ControlPanel, abort_for
 from web.plots import PlotsView
 from web.quadmesh import quad_mesh
 from web.scene import SceneView
@@ -174,7 +174,9 @@ class WebUi:
             panel = self._panels.get(event.client_id) if event.client_id is not None else None
         if panel is not None:
             panel.abort()
-        else:  # a viewer whose panel is not built yet still aborts
+        elif event.client is not None:  # a viewer whose panel is not built yet still aborts
+            abort_for(event.client, self._actions)
+        else:
             self._actions.request(Action.ABORT)
 
     def _refresh_panels(self) -> None:
@@ -253,4 +255,4 @@ class WebUi:
             if self._history.add(snap):
                 self._plots.update(self._history)
         for panel in panels:
-            panel.sync(snap)
+            panel.sync(snap.operator)
