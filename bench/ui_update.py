@@ -5,7 +5,7 @@ guidance loop, so a frame must stay cheap (target: 2 ms for the paper's four
 vehicles), and a viewer must see the team move at 20 updates a second or more.
 
 Two measurements per team size, each with one real websocket viewer attached
-(``web.wireviewer.WireViewer``: it reads and decodes everything the page sends):
+(``web.wireviewer.WireViewer``):
 
 * **frame cost** (server side): a real viser server and the page's scene
   (``web.scene.SceneView``), the team moving every frame (positions,
@@ -13,7 +13,9 @@ Two measurements per team size, each with one real websocket viewer attached
   send-only-what-changed), frames back to back. Reported: building the
   frame's arrays and handing them to viser (median and p99, ms) and the
   process CPU time per frame (which includes viser's serialisation on its
-  own thread).
+  own thread). The viewer here reads and discards (``decode=False``): it
+  shares the measured process, and decoding there would be counted in the
+  CPU time and compete with the timed frames for the GIL.
 * **received rate**: the real page (``web.ui.WebUi``: scene, status and plots,
   the viewer's panel and camera follow) of a real ``GcsApp`` whose telemetry
   and simulator truth are a moving team fed into its fleet table (no
@@ -129,7 +131,7 @@ def frame_cost(view: TeamView, mesh: tuple[np.ndarray, np.ndarray], *,
     """Server-side cost of the scene's frames, back to back, one viewer attached."""
     port = free_tcp_port()
     server = viser.ViserServer(host="127.0.0.1", port=port, verbose=False)
-    viewer = WireViewer(port)
+    viewer = WireViewer(port, decode=False)
     try:
         scene = SceneView(server.scene, view, mesh, geofence_xy=4.0)
         trails = Trails(view.n)

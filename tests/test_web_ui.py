@@ -110,6 +110,28 @@ def test_a_viewer_receives_the_team_where_it_is_and_right_way_up(
         viewer.close()
 
 
+def test_a_counting_viewer_reads_everything_and_decodes_nothing(
+        server: viser.ViserServer) -> None:
+    """bench/ui_update.py's frame-cost viewer shares the measured process: it must only
+    read (its decoding would count as the page's cost), yet still drain what is sent."""
+    scene = SceneView(server.scene, VIEW, quad_mesh(0.08, 0.11), geofence_xy=4.0)
+    scene.draw(build_frame(VIEW, fleet(1.0), scale=1.0, truth=None, trails=Trails(4)))
+    counting, decoding = WireViewer(server.get_port(), decode=False), WireViewer(server.get_port())
+    try:
+        for k in range(5):
+            scene.draw(build_frame(VIEW, fleet(1.0 + k, shift=0.1 * k), scale=1.0, truth=None,
+                                   trails=Trails(4)))
+        server.flush()
+        received, decoded = counting.settled(), decoding.settled()
+        # the same scene, in windows viser batches and compresses per viewer
+        assert decoded > 5_000 and abs(received - decoded) < 0.25 * decoded, (received, decoded)
+        assert decoding.node("/team/vehicles") is not None and decoding.updates("/team") > 0
+        assert counting.node("/team/vehicles") is None and counting.updates("/team") == 0
+    finally:
+        counting.close()
+        decoding.close()
+
+
 def test_only_what_changed_is_sent(server: viser.ViserServer) -> None:
     scene = SceneView(server.scene, VIEW, quad_mesh(0.08, 0.11), geofence_xy=4.0)
     viewer = WireViewer(server.get_port())

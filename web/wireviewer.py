@@ -165,10 +165,14 @@ class WireViewer(SceneRecord):
     Args:
         port: the page's port.
         host: the page's host.
+        decode: False to read and discard, counting only the bytes (:attr:`received`):
+            for a viewer inside a process that measures the page's own cost, where
+            decoding would be counted as that cost and compete for its GIL.
     """
 
-    def __init__(self, port: int, *, host: str = "127.0.0.1") -> None:
+    def __init__(self, port: int, *, host: str = "127.0.0.1", decode: bool = True) -> None:
         super().__init__()
+        self._decode = decode
         self._stop = threading.Event()
         self._ws = connect(f"ws://{host}:{port}",
                            subprotocols=[f"viser-v{viser.__version__}"], max_size=None)
@@ -184,7 +188,11 @@ class WireViewer(SceneRecord):
             except ConnectionClosed:
                 return
             assert isinstance(data, bytes)
-            self.take(data, time.monotonic())
+            if self._decode:
+                self.take(data, time.monotonic())
+            else:
+                with self._lock:
+                    self.received += len(data)
 
     def send(self, message: viser_messages.Message) -> None:
         """Send the page one message, as a browser does (a camera, a GUI value...)."""
