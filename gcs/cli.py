@@ -197,7 +197,8 @@ def _add_page_options(p: argparse.ArgumentParser) -> None:
                    help="interface to serve the page on (default 127.0.0.1: this machine "
                         "only; 0.0.0.0 for every interface)")
     p.add_argument("--gamepad", metavar="FILE",
-                   help="gamepad mapping (default configs/gamepad.yaml if present)")
+                   help="gamepad mapping (default: configs/gamepad.yaml in the current "
+                        "directory, else the mapping shipped beside the package)")
     p.add_argument("--no-gamepad", action="store_true", help="do not read a gamepad")
 
 

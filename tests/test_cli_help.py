@@ -57,3 +57,14 @@ def test_each_command_has_its_own_help(command: str,
         main([command, "--help"])
     assert info.value.code == 0
     assert capsys.readouterr().out.startswith(f"usage: gcs {command} ")
+
+
+@pytest.mark.parametrize("command", ["run", "demo"])
+def test_the_gamepad_help_names_both_default_mappings(command: str,
+                                                      capsys: pytest.CaptureFixture[str]) -> None:
+    """As web.launch.default_gamepad reads them: the directory's own, else the shipped one."""
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert ("configs/gamepad.yaml in the current directory, else the mapping shipped beside "
+            "the package") in text, text
