@@ -66,11 +66,12 @@ class _VehicleLink:
                                                                  sysid=sysid)
 
     def close(self) -> None:
-        self.transport.close()
+        # The token first: it is what tells every watcher the vehicle is gone, at once.
         if self.token is not None:
             with contextlib.suppress(zenoh.ZError):
                 self.token.undeclare()
             self.token = None
+        self.transport.close()
 
 
 class HostFabric:
@@ -160,15 +161,19 @@ class HostFabric:
         self._truth_sent += 1  # the loop's thread only, as the clock
 
     def close(self) -> None:
-        """Undeclare everything and close the session; idempotent."""
-        for index in list(self._links):
-            self.drop_vehicle(index)
-        for sub in self._subscribers:
+        """Undeclare everything and close the session; idempotent. The session is closed
+        whatever else fails: a process that exits with it open keeps its vehicles' tokens
+        alive for the peers until zenoh's lease runs out (seconds)."""
+        try:
+            for index in list(self._links):
+                self.drop_vehicle(index)
+            for sub in self._subscribers:
+                with contextlib.suppress(zenoh.ZError):
+                    sub.undeclare()
+            self._subscribers.clear()
+        finally:
             with contextlib.suppress(zenoh.ZError):
-                sub.undeclare()
-        self._subscribers.clear()
-        with contextlib.suppress(zenoh.ZError):
-            self._session.close()
+                self._session.close()
 
     @staticmethod
     def _on_ack(sample: zenoh.Sample, inbox: Inbox) -> None:

@@ -215,6 +215,45 @@ def test_two_sessions_exchange_frames_under_the_documented_keys(fabric: Fabric) 
     assert (msg.get_type(), msg.get_srcSystem()) == ("HEARTBEAT", 3)
 
 
+def test_a_transport_closes_while_another_thread_sends(fabric: Fabric) -> None:
+    """What a killed sim vehicle does: the loop closes its link while a receive thread is
+    echoing a frame. zenoh-python's undeclare raised "Already borrowed" during a put; the
+    sim loop died of it (every vehicle gone, the clock stopped). 30 of 30 closes raised
+    before the fix."""
+    received = threading.Semaphore(0)
+    fabric.gcs.declare_subscriber(f"fleet/{FLEET}/vehicle/*/mavlink/from_vehicle",
+                                  lambda _: received.release())
+    frame = bytes(280)
+    for sysid in range(1, 31):
+        transport = ZenohTransport(
+            fabric.sim, tx_key=keys.mavlink(FLEET, sysid, keys.Direction.FROM_VEHICLE),
+            rx_key=keys.mavlink(FLEET, sysid, keys.Direction.TO_VEHICLE),
+            congestion=zenoh.CongestionControl.BLOCK)
+        stop = threading.Event()
+        failures: list[BaseException] = []
+
+        def send_until_stopped(transport: ZenohTransport = transport,
+                               stop: threading.Event = stop,
+                               failures: list[BaseException] = failures) -> None:
+            try:
+                while not stop.is_set():
+                    transport.send(frame)
+            except BaseException as exc:  # the test reports it below
+                failures.append(exc)
+
+        sender = threading.Thread(target=send_until_stopped)
+        sender.start()
+        try:
+            assert received.acquire(timeout=5.0), f"vehicle {sysid}: nothing sent"
+            transport.close()  # mid-stream
+        finally:
+            stop.set()
+            sender.join(timeout=5.0)
+        assert failures == [], f"vehicle {sysid}: the sender failed: {failures[0]!r}"
+        assert not sender.is_alive()
+    transport.send(frame)  # after close: dropped, no error
+
+
 def test_link_over_zenoh_with_a_simulated_vehicle(fabric: Fabric) -> None:
     vehicle = ZenohVehicle(fabric.sim, 3)
     link = Link(3, ZenohTransport.for_gcs(fabric.gcs, fleet=FLEET, sysid=3),

@@ -108,6 +108,10 @@ class ZenohTransport:
         self._subscriber: zenoh.Subscriber | None = None
         self._started = False
         self._lock = threading.Lock()
+        # Held around every put and while the publisher is taken away: zenoh-python's
+        # undeclare raises "Already borrowed" while another thread is inside put (a sim
+        # vehicle killed while its receive thread echoes a frame crashed the sim).
+        self._send_lock = threading.Lock()
         self.callback_errors = 0
         """Exceptions raised by the receive callback (logged, then counted)."""
 
@@ -164,19 +168,23 @@ class ZenohTransport:
             self._started = True
 
     def send(self, frame: bytes) -> None:
-        """Publish one payload; dropped silently after close."""
-        publisher = self._publisher
-        if publisher is not None:
+        """Publish one payload (any thread); dropped silently after close."""
+        with self._send_lock:
+            publisher = self._publisher
+            if publisher is None:
+                return
             try:
                 publisher.put(frame)
             except zenoh.ZError:  # session closed underneath us: a lost frame, as on a radio
                 _log.debug("zenoh put failed on %s", self._tx_key)
 
     def close(self) -> None:
-        """Undeclare the subscriber and publisher (the session stays open)."""
+        """Undeclare the subscriber and publisher (the session stays open); safe while
+        other threads send (a put in progress ends first, later ones are dropped)."""
         with self._lock:
-            sub, pub = self._subscriber, self._publisher
-            self._subscriber = self._publisher = None
+            with self._send_lock:
+                sub, pub = self._subscriber, self._publisher
+                self._subscriber = self._publisher = None
             if self._started and self._receiver is not None and pub is not None:
                 assert self._rx_sysid is not None
                 self._receiver.unregister(self._rx_sysid)
