@@ -145,14 +145,10 @@ def _os_error(exc: OSError, path: object) -> str:
 
 
 def _default_team() -> str:
-    """configs/bebop_square.yaml here, or beside the installed package (run from anywhere)."""
-    from pathlib import Path
+    """configs/bebop_square.yaml here, or the shipped one (run from anywhere)."""
+    from gcs.shipped import default_config
 
-    here = Path("configs/bebop_square.yaml")
-    if here.is_file():
-        return str(here)
-    beside = Path(__file__).resolve().parent.parent / "configs" / "bebop_square.yaml"
-    return str(beside) if beside.is_file() else str(here)
+    return str(default_config("bebop_square.yaml"))
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
@@ -198,7 +194,7 @@ def _add_page_options(p: argparse.ArgumentParser) -> None:
                         "only; 0.0.0.0 for every interface)")
     p.add_argument("--gamepad", metavar="FILE",
                    help="gamepad mapping (default: configs/gamepad.yaml in the current "
-                        "directory, else the mapping shipped beside the package)")
+                        "directory, else the shipped one)")
     p.add_argument("--no-gamepad", action="store_true", help="do not read a gamepad")
 
 

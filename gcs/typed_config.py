@@ -30,6 +30,8 @@ from typing import Any, Literal, TypeVar, get_args, get_origin, get_type_hints
 
 import yaml
 
+from gcs.shipped import missing_config_hint
+
 __all__ = ["ConfigError", "field", "from_mapping", "load_yaml"]
 
 T = TypeVar("T")
@@ -71,7 +73,8 @@ def load_yaml(path: str | Path) -> Any:
     try:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
-        raise ConfigError(str(path), "", f"cannot read file ({exc.strerror})") from None
+        raise ConfigError(str(path), "", f"cannot read file ({exc.strerror})"
+                          f"{missing_config_hint(path)}") from None
     try:
         return yaml.safe_load(text)
     except yaml.YAMLError as exc:

@@ -6,14 +6,13 @@ sim host builds its team the same way from its own configs.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
+from gcs.shipped import shipped_config
 from sim.config import WorldConfig
 from sim.layout import Layout
 from sim.world import World
-from vehicles.airframe import Airframe
+from vehicles.airframe import BEBOP2, Airframe
 from vehicles.autopilot import Autopilot
 from vehicles.config import AutopilotConfig
 from vehicles.modes import Mode
@@ -26,12 +25,11 @@ __all__ = [
     "take_off",
 ]
 
-_CONFIGS = Path(__file__).resolve().parent.parent / "configs"
-DEFAULT_AIRFRAME = _CONFIGS / "airframes" / "bebop2.yaml"
+DEFAULT_AIRFRAME = BEBOP2
 """The Bebop 2 airframe file."""
-DEFAULT_WORLD_CONFIG = _CONFIGS / "sim" / "default.yaml"
+DEFAULT_WORLD_CONFIG = shipped_config("sim/default.yaml")
 """The default world (ropes, ground, wind, sensors) file."""
-DEFAULT_AUTOPILOT_CONFIG = _CONFIGS / "sim" / "autopilot.yaml"
+DEFAULT_AUTOPILOT_CONFIG = shipped_config("sim/autopilot.yaml")
 """The default onboard autopilot file."""
 
 

@@ -66,5 +66,4 @@ def test_the_gamepad_help_names_both_default_mappings(command: str,
     with pytest.raises(SystemExit):
         main([command, "--help"])
     text = " ".join(capsys.readouterr().out.split())
-    assert ("configs/gamepad.yaml in the current directory, else the mapping shipped beside "
-            "the package") in text, text
+    assert "configs/gamepad.yaml in the current directory, else the shipped one" in text, text

@@ -12,11 +12,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from gcs.shipped import shipped_config
 from gcs.typed_config import field, from_mapping, load_yaml
 
 __all__ = ["BEBOP2", "Airframe", "bebop2", "load_airframe"]
 
-BEBOP2 = Path(__file__).resolve().parents[1] / "configs" / "airframes" / "bebop2.yaml"
+BEBOP2 = shipped_config("airframes/bebop2.yaml")
 """The paper's vehicle, the Parrot Bebop 2."""
 
 

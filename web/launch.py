@@ -25,12 +25,13 @@ from gcs.config import load_team
 from gcs.gamepad import Gamepad, load_gamepad_config
 from gcs.link.zenoh_session import ZenohSettings
 from gcs.phases import Action, PhaseError
+from gcs.shipped import LOCAL_CONFIGS, default_config
 from gcs.simprocess import SimProcess, free_tcp_port
 from web.ui import WebUi
 
 __all__ = ["DEFAULT_GAMEPAD", "default_gamepad", "run_demo", "run_gcs", "serve"]
 
-DEFAULT_GAMEPAD = Path("configs") / "gamepad.yaml"
+DEFAULT_GAMEPAD = LOCAL_CONFIGS / "gamepad.yaml"
 """Gamepad mapping used when none is named (if the file exists), see :func:`default_gamepad`."""
 
 
@@ -42,10 +43,7 @@ def default_gamepad() -> Path:
     shipped one (relative to the current directory alone, the pad was silently
     off there).
     """
-    if DEFAULT_GAMEPAD.is_file():
-        return DEFAULT_GAMEPAD
-    beside = Path(__file__).resolve().parent.parent / DEFAULT_GAMEPAD
-    return beside if beside.is_file() else DEFAULT_GAMEPAD
+    return default_config(DEFAULT_GAMEPAD.name)
 
 
 def _say(text: str) -> None:
