@@ -184,17 +184,22 @@ def browser(tmp_path_factory):  # type: ignore[no-untyped-def]
 
 WIRES: dict[int, SceneRecord] = {}
 """What each page (by ``id``) received over its websocket, decoded."""
+SENT: dict[int, list[tuple[float, bytes]]] = {}
+"""What each page (by ``id``) sent over its websocket: (time, raw msgpack frame)."""
 
 
 def open_page(browser, demo: Demo):  # type: ignore[no-untyped-def]
     page = browser.new_context(viewport={"width": 1400, "height": 800}).new_page()
     record = WIRES[id(page)] = SceneRecord()
+    sent = SENT[id(page)] = []
 
     def on_websocket(ws) -> None:  # type: ignore[no-untyped-def]
         def on_frame(payload: bytes | str) -> None:
             if isinstance(payload, bytes):
                 record.take(payload, time.monotonic())
         ws.on("framereceived", on_frame)
+        ws.on("framesent", lambda payload: sent.append(
+            (time.monotonic(), payload if isinstance(payload, bytes) else payload.encode())))
 
     page.on("websocket", on_websocket)
     page.goto(demo.url)
@@ -281,7 +286,8 @@ def situation(page, demo: Demo) -> str:  # type: ignore[no-untyped-def]
     rows = " | ".join(page.locator(f"[data-gcs=vehicle-{vid}]").inner_text().replace("\n", " ")
                       for vid in (1, 2, 3, 4))
     centre = np.asarray(demo.truth.vehicle_p_ned).mean(axis=0) if demo.truth else None
-    return (f"phase {text(page, 'phase')}; team at {centre} m (NED); "
+    notices = " | ".join(page.locator(".mantine-Notification-root").all_inner_texts())
+    return (f"phase {text(page, 'phase')}; team at {centre} m (NED); notices [{notices}]; "
             f"command {text(page, 'operator')}; "
             f"vehicles {rows}; events {text(page, 'events')[-600:]}; "
             f"demo said {''.join(demo.lines[-6:] + demo.err[-6:])[-800:]}")
@@ -368,15 +374,27 @@ def test_page_shows_the_team_and_the_payload(pilot, demo: Demo, screens: Path) -
 def press_phase(page, button: str, phase: str, demo: Demo,  # type: ignore[no-untyped-def]
                 timeout: float = 40.0) -> None:
     """Press a phase button and wait for the page to show ``phase``."""
+    clicked = time.monotonic()
     page.get_by_role("button", name=button, exact=True).click()
-    wait_for(lambda: text(page, "phase") == phase, timeout, f"phase {phase}",
-             lambda: situation(page, demo))
+
+    def explain() -> str:
+        page.evaluate("0")  # Playwright delivers websocket events during its own calls
+        frames = [f"+{t - clicked:.2f} s {len(f)} B" for t, f in SENT[id(page)]
+                  if t >= clicked and button.encode() in f]
+        return f"frames naming {button!r} sent since the click: {frames}; " + situation(page, demo)
+
+    wait_for(lambda: text(page, "phase") == phase, timeout, f"phase {phase}", explain)
 
 
 def test_the_pilot_flies_the_team_with_buttons_keys_and_sticks(pilot, demo: Demo,
                                                                 screens: Path) -> None:
     pilot.get_by_role("button", name="Take control").click()
     wait_for(lambda: banner(pilot) == "You hold control.", 10, "control taken")
+    # the script's channel exists for the holder and is never shown (the sticks and keys
+    # below travel through it)
+    field = pilot.locator("label", has_text=re.compile(r"^browser input$"))
+    wait_for(lambda: field.count() == 1 and not field.is_visible(), 5,
+             "the browser input field present and hidden", lambda: f"{field.count()} fields")
     for button, phase in (("arm", "armed"), ("take off", "hover"), ("lift", "lifting")):
         press_phase(pilot, button, phase, demo)
     # set down while lifting: the altitude target drops back, the team is in hover again

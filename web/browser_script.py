@@ -34,7 +34,9 @@ above viser's "disconnected" layer, then says "NOT CONNECTED".
 It reports through the holder's read-only "browser input" text field, whose
 input it sets the way a user's typing would (native value setter plus an
 ``input`` event), so the line travels over viser's own websocket as an
-ordinary GUI update that the server attributes to that client. A viewer
+ordinary GUI update that the server attributes to that client. The script hides
+that field's row (``display: none``: React still takes the event), so the
+operator never sees it; a viser visibility flag would take it out of the page. A viewer
 without control has no such field: the script then leaves the keys alone (W/A/S/D/Q/E
 move viser's camera as usual) and the pads do nothing.
 
@@ -108,7 +110,9 @@ _SCRIPT = r"""
       if (label.textContent !== CFG.channel) continue;
       let box = label.parentElement;
       while (box && !box.querySelector("input")) box = box.parentElement;
-      return box ? box.querySelector("input") : null;
+      if (!box) return null;
+      box.style.display = "none";  // a channel, not a control: the operator never sees it
+      return box.querySelector("input");
     }
     return null;
   }
@@ -136,6 +140,7 @@ _SCRIPT = r"""
     schedule();
   }
   setInterval(() => {
+    channel();  // hides the field as soon as viser draws it
     const active = st.held.size > 0 || st.pad[0] !== 0 || st.pad[1] !== 0 || st.rot !== 0;
     if (active || Date.now() - st.changedAt < CFG.linger) schedule();
   }, CFG.period);
