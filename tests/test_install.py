@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import site
 import subprocess
 import sys
 from pathlib import Path
@@ -40,9 +41,16 @@ def installed(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
                 "--no-build-isolation", "-w", str(wheels), str(source)], cwd=base, timeout=300)
     assert done.returncode == 0, done.stderr
     wheel = next(wheels.glob("formation_gcs-*.whl"))
-    done = run([sys.executable, "-m", "venv", "--system-site-packages", "--without-pip",
-                str(venv)], cwd=base)
+    done = run([sys.executable, "-m", "venv", "--without-pip", str(venv)], cwd=base)
     assert done.returncode == 0, done.stderr
+    # the dependencies: this environment's site directories, after the venv's own (a
+    # path line in a .pth; .pth files inside them, this checkout's editable hook among
+    # them, are not run). --system-site-packages would give the base interpreter's
+    # instead when this one is itself a venv.
+    (inner,) = venv.glob("lib/python*/site-packages")
+    outer = [*site.getsitepackages(), site.getusersitepackages()]
+    (inner / "outer-environment.pth").write_text(
+        "".join(f"{d}\n" for d in outer if Path(d).is_dir()))
     done = run([sys.executable, "-m", "pip", "--python", str(venv / "bin" / "python"),
                 "install", "--quiet", "--no-deps", str(wheel)], cwd=base)
     assert done.returncode == 0, done.stderr
