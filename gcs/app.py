@@ -10,6 +10,7 @@ guidance: a headless flight is then deterministic and as fast as the machine).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import gc
 import sys
 import threading
@@ -65,8 +66,8 @@ class _EchoCounter:
         for link in links:
             sysid = link.sysid
             self._sent[sysid] = self._echoed[sysid] = 0
-            link.add_frame_listener(lambda d, frame, s=sysid: self._on_frame(s, d, frame))
-            link.add_message_listener(lambda msg, s=sysid: self._on_message(s, msg))
+            link.add_frame_listener(functools.partial(self._on_frame, sysid))
+            link.add_message_listener(functools.partial(self._on_message, sysid))
 
     def _on_frame(self, sysid: int, direction: FrameDirection, frame: bytes) -> None:
         if direction is FrameDirection.OUT and _msgid(frame) == _SETPOINT_ID:
@@ -205,6 +206,12 @@ class GcsApp:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
 
+    @property
+    def loop(self) -> Runtime:
+        """:attr:`runtime`, which is None only while ``__init__`` builds the links."""
+        assert self.runtime is not None, "the runtime is built in __init__"
+        return self.runtime
+
     def _on_presence(self, event: PresenceEvent) -> None:
         self._note("info" if event.presence is Presence.APPEARED else "warning", event.text)
 
@@ -257,11 +264,11 @@ class GcsApp:
     def add_listener(self,
                      callback: Callable[[RuntimeSnapshot, SimTruth | None], None]) -> None:
         """Call ``callback(snapshot, snapshot.truth)`` after every tick (loop thread: be quick)."""
-        self.runtime.add_listener(lambda snap: callback(snap, snap.truth))
+        self.loop.add_listener(lambda snap: callback(snap, snap.truth))
 
     @property
     def snapshot(self) -> RuntimeSnapshot | None:
-        return self.runtime.snapshot
+        return self.loop.snapshot
 
     def start(self) -> None:
         """Run the loop on its own thread (and let it take the GIL back quickly).
@@ -274,7 +281,7 @@ class GcsApp:
         gc.collect()
         gc.freeze()
         sys.setswitchinterval(min(sys.getswitchinterval(), LOOP_GIL_SWITCH_S))
-        self._thread = threading.Thread(target=self.runtime.run, args=(self._stop,),
+        self._thread = threading.Thread(target=self.loop.run, args=(self._stop,),
                                         daemon=True, name="gcs-loop")
         self._thread.start()
 
@@ -288,7 +295,7 @@ class GcsApp:
             self.clock.close()
         if self._thread is not None:
             self._thread.join(timeout=3.0)
-        self.runtime.close()
+        self.loop.close()
         self.links.close()
         if self.recorder is not None:
             self.recorder.close()

@@ -79,8 +79,7 @@ class FleetTable:
         self._lock = threading.Lock()
         for i, vid in enumerate(self.ids):
             profile = profiles[vid]
-            profile.link.add_record_listener(
-                lambda record, i=i, profile=profile: self._write(i, profile, record))
+            profile.link.add_record_listener(functools.partial(self._write, i, profile))
             tel = profile.link.telemetry  # what arrived before the listener was there
             for record in (tel.heartbeat, tel.position, tel.attitude, tel.status):
                 if record is not None:

@@ -30,7 +30,7 @@ from gcs.logcolumns import decode_columns
 from gcs.logreader import TlogIndex, msg_id
 from gcs.metrics import FlightMetrics
 from gcs.phases import Phase
-from gcs.recorder import ARRAY_SPAN, ARRAYS, chunked, parse_team_header
+from gcs.recorder import ARRAY_SPAN, ARRAYS, TeamHeader, chunked, parse_team_header
 
 __all__ = ["EARTH_RADIUS_M", "ORIGIN_TOLERANCE_M", "FlightLog", "Track", "tilt_angle"]
 
@@ -84,7 +84,7 @@ class FlightLog:
     index: TlogIndex
     gcs_sysid: int | None  # the recorder's GCS
     ground: frozenset[int]  # every ground station's system (the GCS's and MAV_TYPE_GCS ones)
-    team: dict[str, object] | None
+    team: TeamHeader | None
     tick_t: np.ndarray  # (K,) Unix s
     phase: np.ndarray  # (K,) int
     values: dict[str, np.ndarray]  # NAMED_VALUE_FLOAT per tick: stk_fwd, scale, alt_tgt...
@@ -178,7 +178,7 @@ class FlightLog:
     @property
     def n_vehicles(self) -> int:
         if self.team is not None:
-            return len(self.team["ids"])  # type: ignore[arg-type]
+            return len(self.team["ids"])
         return len(self.tracks)
 
     def metrics(self) -> FlightMetrics:
@@ -195,8 +195,9 @@ class FlightLog:
         true_p, rope = self.per_vehicle("veh_true", 3), self.per_vehicle("rope_T", 1)
         for k, t in enumerate(self.tick_t):
             payload = self.arrays["payload"][k, :3] if truth else None
-            whole = truth and bool(np.isfinite(payload).all() and np.isfinite(true_p[k]).all()
-                                   and np.isfinite(rope[k]).all())
+            whole = payload is not None and bool(
+                np.isfinite(payload).all() and np.isfinite(true_p[k]).all()
+                and np.isfinite(rope[k]).all())
             m.add_tick(
                 t - self.tick_t[0], Phase(int(self.phase[k])), distance_errors=de[k],
                 tilt=tilt[k, :, 0], accel_cmd=np.nan_to_num(acc[k]) if n else np.zeros((1, 2)),
@@ -294,7 +295,7 @@ def _ground_stations(index: TlogIndex) -> set[int]:
 
 
 def _read_internals(index: TlogIndex, gcs: int, ticks: dict[int, dict[str, object]],
-                    progress: Callable[[str, int, int], None] | None) -> dict | None:
+                    progress: Callable[[str, int, int], None] | None) -> TeamHeader | None:
     """Fill ``ticks`` (recorder time stamp -> values) from the GCS's messages; the team.
 
     Decoded as numpy columns (:mod:`gcs.logcolumns`): a DEBUG_FLOAT_ARRAY as
@@ -362,7 +363,7 @@ def _join(chunks: dict[int, np.ndarray]) -> np.ndarray:
     return flat
 
 
-def _trim(name: str, flat: np.ndarray, team: dict | None) -> np.ndarray:
+def _trim(name: str, flat: np.ndarray, team: TeamHeader | None) -> np.ndarray:
     """The array at its size when the team is known: the last chunk's zero padding cut,
     a lost last chunk NaN, so every tick's row has the width the team says."""
     if team is None:

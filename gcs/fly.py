@@ -65,7 +65,7 @@ def fly(team: Team, scenario: Scenario, *, speed: str = "max", record: Path | No
             with app.gate.participant():
                 app.start()
                 try:
-                    play(scenario, app.runtime, GatedClock(app.clock, app.gate), on_step=show)
+                    play(scenario, app.loop, GatedClock(app.clock, app.gate), on_step=show)
                 except ScenarioError as exc:
                     error = str(exc)
                 except Exception as exc:  # the clock stopped, the sim died...

@@ -71,7 +71,7 @@ def scan_records(buf: np.ndarray, pos: int, crc_extra: np.ndarray, t_us: np.ndar
     unknown = 0
     truncated = False
     while pos + 8 < size and n < cap:
-        stamp = 0
+        stamp = np.int64(0)
         for j in range(8):
             stamp = (stamp << 8) | np.int64(buf[pos + j])
         start = pos + 8
@@ -104,7 +104,7 @@ def scan_records(buf: np.ndarray, pos: int, crc_extra: np.ndarray, t_us: np.ndar
             break
         if ident >= crc_extra.shape[0] or crc_extra[ident] < 0:
             unknown += 1
-            pos = start + frame
+            pos = int(start + frame)
             continue
         crc = 0xFFFF
         for j in range(start + 1, start + header + payload):
@@ -123,7 +123,7 @@ def scan_records(buf: np.ndarray, pos: int, crc_extra: np.ndarray, t_us: np.ndar
         compid[n] = component
         seq[n] = number
         n += 1
-        pos = start + frame
+        pos = int(start + frame)
     return n, pos, skipped, unknown, truncated
 
 

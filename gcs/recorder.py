@@ -31,14 +31,15 @@ import struct
 import threading
 import time
 from pathlib import Path
+from typing import TypedDict
 
 import numpy as np
 
 from gcs.link.dialect import MavMessage, mavlink
 from gcs.link.encoder import MavlinkEncoder
 
-__all__ = ["ARRAYS", "ARRAY_SPAN", "TlogRecorder", "chunked", "parse_team_header",
-           "team_header"]
+__all__ = ["ARRAYS", "ARRAY_SPAN", "TeamHeader", "TlogRecorder", "chunked",
+           "parse_team_header", "team_header"]
 
 #: First DEBUG_FLOAT_ARRAY array_id of each recorded array; each owns ARRAY_SPAN ids.
 ARRAYS = {"dist_err": 1, "acc_cmd": 101, "tilt": 301, "payload": 201, "rope_T": 211,
@@ -63,7 +64,17 @@ def team_header(ids: tuple[int, ...], edges: np.ndarray, distances: np.ndarray,
                      accel_axis], dtype=float)
 
 
-def parse_team_header(values: np.ndarray) -> dict[str, object]:
+class TeamHeader(TypedDict):
+    """The team as :func:`parse_team_header` reads it back from a log."""
+
+    ids: tuple[int, ...]
+    edges: np.ndarray  # (m, 2) indices into ids: tail, head
+    distances: np.ndarray  # (m,) desired distances, m
+    accel_norm: float
+    accel_axis: float
+
+
+def parse_team_header(values: np.ndarray) -> TeamHeader:
     """Inverse of :func:`team_header`; ValueError if the array is not one."""
     try:
         n, m = int(values[0]), int(values[1])

@@ -24,6 +24,7 @@ from __future__ import annotations
 import json
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 
@@ -61,9 +62,9 @@ def envelope(y: np.ndarray, buckets: int = PLOT_BUCKETS) -> np.ndarray:
     if n <= 2 * buckets:
         return np.arange(n)
     size = -(-n // buckets)
-    grid = np.full(size * buckets, np.nan)
-    grid[:n] = y
-    grid = grid.reshape(buckets, size)
+    flat = np.full(size * buckets, np.nan)
+    flat[:n] = y
+    grid = flat.reshape(buckets, size)
     finite = np.isfinite(grid)
     base = np.arange(buckets) * size
     lo = base + np.where(finite, grid, np.inf).argmin(axis=1)
@@ -72,13 +73,13 @@ def envelope(y: np.ndarray, buckets: int = PLOT_BUCKETS) -> np.ndarray:
     return keep[keep < n]
 
 
-def _plot(ax: plt.Axes, t: np.ndarray, y: np.ndarray, *args: object, **kwargs: object) -> list:
+def _plot(ax: plt.Axes, t: np.ndarray, y: np.ndarray, *args: Any, **kwargs: Any) -> list:
     """``ax.plot(t, y, ...)`` of a time series, thinned by :func:`envelope`."""
     keep = envelope(y)
     return ax.plot(t[keep], y[keep], *args, **kwargs)
 
 
-def _path(ax: plt.Axes, x: np.ndarray, y: np.ndarray, *args: object, **kwargs: object) -> list:
+def _path(ax: plt.Axes, x: np.ndarray, y: np.ndarray, *args: Any, **kwargs: Any) -> list:
     """``ax.plot(x, y, ...)`` of a path, every k-th point (paths are smooth) plus the last."""
     keep = np.unique(np.r_[np.arange(0, len(x), max(1, len(x) // (4 * PLOT_BUCKETS))),
                            len(x) - 1]) if len(x) else np.zeros(0, dtype=int)
@@ -86,7 +87,7 @@ def _path(ax: plt.Axes, x: np.ndarray, y: np.ndarray, *args: object, **kwargs: o
 
 
 def write_report(log: FlightLog, out: Path,
-                 progress: Callable[[str], None] | None = None) -> dict[str, object]:
+                 progress: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Write the figures and summaries of ``log`` into ``out``; returns the summary."""
     out.mkdir(parents=True, exist_ok=True)
     figures = []
@@ -129,6 +130,7 @@ def _formation(log: FlightLog) -> plt.Figure | None:
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
     desired_drawn = log.team is not None and "dist_err" in log.arrays and len(log.tick_t) > 0
     if desired_drawn:
+        assert log.team is not None  # desired_drawn says so
         d = np.asarray(log.team["distances"])
         scale = log.values.get("scale", np.ones(len(log.tick_t)))
         desired = scale[:, None] * d[None, :]
@@ -137,8 +139,8 @@ def _formation(log: FlightLog) -> plt.Figure | None:
         edges = log.team["edges"]
         t = log.tick_t - t0
         for k in range(len(d)):
-            i, j = edges[k]  # type: ignore[index]
-            _plot(top, t, actual[:, k], lw=1.2, label=f"{ids[i]}-{ids[j]}")  # type: ignore[index]
+            i, j = edges[k]
+            _plot(top, t, actual[:, k], lw=1.2, label=f"{ids[i]}-{ids[j]}")
         for value in np.unique(np.round(desired, 3), axis=1).T:
             _plot(top, t, value, "k--", lw=0.8)
         top.legend(ncol=6, fontsize=7, loc="upper right")
@@ -225,8 +227,8 @@ def _distance_errors(log: FlightLog) -> plt.Figure | None:
     e = log.arrays["dist_err"]
     ids, edges = log.team["ids"], log.team["edges"]
     for k in range(e.shape[1]):
-        i, j = edges[k]  # type: ignore[index]
-        _plot(ax, log.tick_t - t0, e[:, k], lw=1, label=f"{ids[i]}-{ids[j]}")  # type: ignore[index]
+        i, j = edges[k]
+        _plot(ax, log.tick_t - t0, e[:, k], lw=1, label=f"{ids[i]}-{ids[j]}")
     _shade_phases(ax, log, t0)
     ax.axhline(0, color="k", lw=0.5)
     ax.set_xlabel("time [s]")
@@ -244,7 +246,7 @@ def _accelerations(log: FlightLog) -> plt.Figure | None:
     acc = log.per_vehicle("acc_cmd", 2)
     ids = log.team["ids"] if log.team is not None else tuple(range(1, log.n_vehicles + 1))
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(10, 6), sharex=True)
-    for i, vid in enumerate(ids):  # type: ignore[arg-type]
+    for i, vid in enumerate(ids):
         line = _plot(top, t, np.linalg.norm(acc[:, i], axis=1), lw=1, label=f"|a| {vid}")[0]
         _plot(bottom, t, acc[:, i, 0], lw=1, color=line.get_color(), label=f"{vid} x")
         _plot(bottom, t, acc[:, i, 1], lw=1, ls=":", color=line.get_color(), label=f"{vid} y")
@@ -263,7 +265,7 @@ def _accelerations(log: FlightLog) -> plt.Figure | None:
     return fig
 
 
-def _summary(log: FlightLog, figures: list[str]) -> dict[str, object]:
+def _summary(log: FlightLog, figures: list[str]) -> dict[str, Any]:
     metrics = log.metrics().to_json() if len(log.tick_t) else log.telemetry_metrics()
     t0 = _t0(log)
     return {
@@ -285,7 +287,7 @@ def _summary(log: FlightLog, figures: list[str]) -> dict[str, object]:
     }
 
 
-def _markdown(s: dict[str, object]) -> str:
+def _markdown(s: dict[str, Any]) -> str:
     m = s["metrics"] or {}
     lines = [f"# Flight report: {Path(str(s['log'])).name}", ""]
     if m:
@@ -293,9 +295,9 @@ def _markdown(s: dict[str, object]) -> str:
         for key in ("duration_s", "worst_distance_error_m", "payload_lift_m", "worst_swing_rad",
                     "worst_bank_rad", "worst_accel_cmd_m_s2", "rope_tension_min_N",
                     "rope_tension_max_N"):
-            value = m.get(key)  # type: ignore[union-attr]
+            value = m.get(key)
             lines.append(f"| {key} | {'not in this log' if value is None else value} |")
-        by_phase = m.get("worst_distance_error_by_phase_m") or {}  # type: ignore[union-attr]
+        by_phase = m.get("worst_distance_error_by_phase_m") or {}
         if by_phase:
             lines += ["", "Worst distance error per phase (m):", ""]
             lines += [f"- {phase}: {value}" for phase, value in by_phase.items()]
@@ -305,6 +307,6 @@ def _markdown(s: dict[str, object]) -> str:
               f"Damaged log: {s['damage']}" if s["damage"] else "Read whole: nothing "
               "truncated, skipped or rejected.", ""]
     if s["missing"]:
-        lines += ["Not in this log:", ""] + [f"- {x}" for x in s["missing"]]  # type: ignore[union-attr]
-    lines += ["", "Figures: " + ", ".join(s["figures"])]  # type: ignore[arg-type]
+        lines += ["Not in this log:", ""] + [f"- {x}" for x in s["missing"]]
+    lines += ["", "Figures: " + ", ".join(s["figures"])]
     return "\n".join(lines) + "\n"

@@ -38,8 +38,8 @@ class SimTruth:
         try:
             d = json.loads(data)
             return cls(t=float(d["t"]), ids=tuple(int(i) for i in d["ids"]),
-                       vehicle_p_ned=tuple(tuple(float(x) for x in p)
-                                           for p in d["vehicle_p_ned"]),  # type: ignore[misc]
+                       vehicle_p_ned=tuple(tuple(float(x) for x in p)  # type: ignore[misc]
+                                           for p in d["vehicle_p_ned"]),
                        payload_p_ned=tuple(float(x) for x in d["payload_p_ned"]),  # type: ignore[arg-type]
                        payload_v_ned=tuple(float(x) for x in d["payload_v_ned"]),  # type: ignore[arg-type]
                        rope_tension=tuple(float(x) for x in d["rope_tension"]))

@@ -157,7 +157,7 @@ def _convert(tp: Any, value: Any, source: str, where: str) -> Any:
             raise ConfigError(source, where, f"expected a mapping, got {_kind(value)}")
         return {_convert(args[0], k, source, where): _convert(args[1], v, source, f"{where}.{k}")
                 for k, v in value.items()}
-    if dataclasses.is_dataclass(tp):
+    if isinstance(tp, type) and dataclasses.is_dataclass(tp):
         if isinstance(value, tp):  # already built and validated (e.g. from its own file)
             return value
         return from_mapping(tp, value, source, where)

@@ -42,6 +42,7 @@ import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import TypeAlias
 
 from gcs.link.decoder import DecodeStats, FrameDecoder
 from gcs.link.dialect import MavMessage
@@ -85,7 +86,7 @@ class EndpointCounters:
     setpoints_refused: int
 
 
-Inbound = AccelSetpoint | MavMessage
+Inbound: TypeAlias = AccelSetpoint | MavMessage
 """What :meth:`VehicleEndpoint.take` leaves for the loop: an accepted setpoint or a message."""
 
 

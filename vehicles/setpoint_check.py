@@ -66,12 +66,15 @@ def check_setpoint(msg: MavMessage, limits: SetpointLimits) -> SetpointVerdict:
     if setpoint is None:
         mask = msg.type_mask & ~int(TypeMask.FORCE_SET)
         return SetpointVerdict(None, Refusal.TYPE_MASK, f"type_mask {mask} unsupported")
+    accel: tuple[float, ...]
+    values: tuple[float, ...]
     if setpoint.kind is SetpointKind.ACCEL:
         accel = setpoint.accel_ned
         values = accel
     else:
+        assert setpoint.z_ned is not None  # read_setpoint gives ACCEL_XY_POS_Z its z
         accel = setpoint.accel_ned[:2]
-        values = (*accel, float(setpoint.z_ned))  # type: ignore[arg-type]
+        values = (*accel, float(setpoint.z_ned))
     if not all(math.isfinite(v) for v in values):
         return SetpointVerdict(None, Refusal.NOT_FINITE, "NaN or infinite value")
     worst = max(abs(a) for a in accel)

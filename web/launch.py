@@ -65,14 +65,14 @@ def _start_gamepad(app: GcsApp, mapping: Path | None,
     def request(action: Action) -> Callable[[], None]:
         def run() -> None:
             try:
-                app.runtime.request(action)
+                app.loop.request(action)
             except PhaseError as exc:
                 _say(f"gamepad: {action.text} refused: {exc}")
         return run
 
     pad = Gamepad(config, app.operator, app.clock, on_abort=request(Action.ABORT),
                   on_resume=request(Action.RESUME), may_steer=may_steer,
-                  on_fault=lambda text: app.runtime.note("warning", text))
+                  on_fault=lambda text: app.loop.note("warning", text))
     try:
         pad.start()
     except RuntimeError as exc:

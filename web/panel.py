@@ -175,7 +175,9 @@ class ControlPanel:
         """
         if operator.guidance_on != self._guidance_shown:
             self._guidance_shown = operator.guidance_on
-            self.guidance.value = operator.guidance_on
+            # viser 1.1 defines a method between the getter and setter of ``value``, so
+            # mypy sees the property as read-only; the setter exists and is what runs.
+            self.guidance.value = operator.guidance_on  # type: ignore[misc]
 
     def follow_camera(self, centroid: np.ndarray | None) -> None:
         """Move this viewer's camera with the team, keeping the viewer's own angle.

@@ -54,7 +54,7 @@ class PlotsView:
         self._desired = self._edges[np.sort(first)]
         x = uplot.Series(label="s ago")
         dist_series = (x,
-                       *(_line(labels[k], k) for k in self._edges),
+                       *(_line(labels[k], int(k)) for k in self._edges),
                        *(uplot.Series(label=f"desired {view.distances[k]:.2f}", stroke="#000",
                                       dash=(6.0, 4.0), width=1.2) for k in self._desired))
         self.window = window
@@ -65,7 +65,7 @@ class PlotsView:
         self.distances = gui.add_uplot(start, dist_series,
                                        title="distances (m)", aspect=1.6,
                                        scales={"x": uplot.Scale(time=False)}, axes=axes)
-        vel_series = (x, *(_line(f"{view.ids[i]}", i) for i in self._vehicles))
+        vel_series = (x, *(_line(f"{view.ids[i]}", int(i)) for i in self._vehicles))
         vaxes = (uplot.Axis(label="seconds before now"), uplot.Axis(label="m/s"))
         still = (x0, *(np.zeros(2) for _ in self._vehicles))
         self.vx = gui.add_uplot(still, vel_series,

@@ -78,7 +78,7 @@ class ReplayCursor:
     def __init__(self, log: FlightLog) -> None:
         self.log = log
         team = log.team
-        self.ids: tuple[int, ...] = (tuple(team["ids"]) if team is not None  # type: ignore[arg-type]
+        self.ids: tuple[int, ...] = (tuple(team["ids"]) if team is not None
                                      else tuple(sorted(log.tracks)))
         # the whole log, whatever its records hold: a vehicle without positions
         # (or a log of texts and modes only) still has a timeline to scrub

@@ -264,7 +264,8 @@ class ReplayUi:
             self._scene.draw(frame)
             self._echo.active = True  # viser calls on_update for our own writes too
             try:
-                self._slider.value = round(t - self.timeline.start, 2)
+                # writable: viser 1.1's setter is not next to its getter, so mypy misses it
+                self._slider.value = round(t - self.timeline.start, 2)  # type: ignore[misc]
             finally:
                 self._echo.active = False
             if state.tick != self._shown_tick or last is None:

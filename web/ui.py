@@ -71,7 +71,7 @@ class WebUi:
     def __init__(self, app: GcsApp, *, host: str = "127.0.0.1", port: int = 8080,
                  rate_hz: float = UI_RATE_HZ) -> None:
         self._app = app
-        runtime = app.runtime
+        runtime = app.loop
         cfg = app.team.config
         self._view = TeamView.from_team(app.team, runtime.analysis)
         self._period = 1.0 / rate_hz
@@ -214,7 +214,7 @@ class WebUi:
     def _frame(self) -> None:
         app = self._app
         started = time.perf_counter()
-        fleet = app.runtime.fleet_table.read(app.clock.now())
+        fleet = app.loop.fleet_table.read(app.clock.now())
         snap = self._snapshot
         self._trails.add(fleet.t, fleet.p_ned)
         frame = build_frame(self._view, fleet, scale=snap.operator.demand.scale if snap else 1.0,
@@ -244,9 +244,9 @@ class WebUi:
 
     def _show_tick(self, snap: RuntimeSnapshot, panels: list[ControlPanel]) -> None:
         app = self._app
-        health = {vid: app.runtime.profiles[vid].link.health for vid in self._view.ids}
+        health = {vid: app.loop.profiles[vid].link.health for vid in self._view.ids}
         with self.server.atomic():
-            self._summary.content = summary_html(snap, loop=app.runtime.stats(),
+            self._summary.content = summary_html(snap, loop=app.loop.stats(),
                                                  control=self._control_text(), ui=self.stats())
             self._vehicles.content = vehicles_html(
                 snap, health=health, truth=snap.truth, mass=app.team.config.airframe.mass,

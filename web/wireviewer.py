@@ -33,6 +33,7 @@ import zstandard
 from viser import _messages as viser_messages
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
+from websockets.typing import Subprotocol
 
 __all__ = ["SceneRecord", "WireViewer", "decode_window", "main", "scene_names"]
 
@@ -175,7 +176,7 @@ class WireViewer(SceneRecord):
         self._decode = decode
         self._stop = threading.Event()
         self._ws = connect(f"ws://{host}:{port}",
-                           subprotocols=[f"viser-v{viser.__version__}"], max_size=None)
+                           subprotocols=[Subprotocol(f"viser-v{viser.__version__}")], max_size=None)
         self._thread = threading.Thread(target=self._read, daemon=True, name="wire-viewer")
         self._thread.start()
 

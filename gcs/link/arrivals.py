@@ -12,8 +12,11 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Callable, Hashable, Mapping
+from typing import TypeVar
 
 __all__ = ["Arrivals"]
+
+_K = TypeVar("_K", bound=Hashable)
 
 _WRAP = 2**32
 """Counts travel as uint32: compared modulo 2^32."""
@@ -35,19 +38,19 @@ class Arrivals:
             if self._waiting:
                 self._cond.notify_all()
 
-    def wait(self, announced: Mapping[Hashable, int], timeout_s: float, *,
-             only: Callable[[Hashable], bool] = lambda _source: True) -> bool:
+    def wait(self, announced: Mapping[_K, int], timeout_s: float, *,
+             only: Callable[[_K], bool] = lambda _source: True) -> bool:
         """Block until every source (those ``only`` accepts) has what ``announced`` says.
 
         False after ``timeout_s``; what was still missing then (sent before this
         receiver listened, or lost) is written off, so it costs one wait only.
         """
-        def lag(source: Hashable, count: int) -> int:  # still to come, modulo 2^32
+        def lag(source: _K, count: int) -> int:  # still to come, modulo 2^32
             have = self._arrived.get(source, 0) + self._missed.get(source, 0)
             ahead = (count - have) % _WRAP
             return ahead if ahead < _WRAP // 2 else 0  # behind the count: nothing to wait for
 
-        def behind() -> dict[Hashable, int]:
+        def behind() -> dict[_K, int]:
             return {s: n for s, n in announced.items() if only(s) and lag(s, n)}
 
         with self._cond:

@@ -79,7 +79,8 @@ def packed_rows(message_type: type[MavMessage], n: int,
     packing two of them one by one does. Finish them with
     :meth:`EncoderBatch.stamp` (or :meth:`MavlinkEncoder.restamp` row by row).
     """
-    rows = np.zeros(n, frame_dtype(message_type))
+    # type[Any] (pymavlink is untyped) is not Hashable to mypy: python/mypy#11470
+    rows = np.zeros(n, frame_dtype(message_type))  # type: ignore[arg-type]
     rows["marker"] = mavlink.PROTOCOL_MARKER_V2
     rows["msgid_lo"] = message_type.id & 0xFFFF
     rows["msgid_hi"] = message_type.id >> 16
@@ -198,8 +199,10 @@ class MavlinkEncoder:
         bytes it yields, and the loop sends one setpoint per vehicle per tick.
         """
         msgid = message_type.id
-        packed = _frame_struct(message_type).pack(mavlink.PROTOCOL_MARKER_V2, 0, 0, 0, 0, 0, 0,
-                                                  msgid & 0xFFFF, msgid >> 16, *values)
+        # type[Any] (pymavlink is untyped) is not Hashable to mypy: python/mypy#11470
+        layout = _frame_struct(message_type)  # type: ignore[arg-type]
+        packed = layout.pack(mavlink.PROTOCOL_MARKER_V2, 0, 0, 0, 0, 0, 0,
+                             msgid & 0xFFFF, msgid >> 16, *values)
         return self.restamp(packed, message_type.crc_extra)
 
     def restamp(self, packed: bytes, crc_extra: int) -> bytes:

@@ -168,7 +168,9 @@ class SetpointPacker:
                      _OFFSETS)
 
 
-_OFFSETS = np.array([frame_dtype(SETPOINT_MESSAGE).fields[name][1]
+_SETPOINT_FIELDS = frame_dtype(SETPOINT_MESSAGE).fields
+assert _SETPOINT_FIELDS is not None  # a packed frame's dtype is structured: named fields
+_OFFSETS = np.array([_SETPOINT_FIELDS[name][1]
                      for name in ("time_boot_ms", "z", "afx", "afy", "afz")], np.int64)
 """Byte offsets in a packed row of the fields that change from tick to tick (an argument
 of the kernel, not a constant compiled into its cache)."""

@@ -48,7 +48,7 @@ _EPOCH_2015 = 1420070400.0
 _ONE_MINUTE = 60 * 100_000  # in signing timestamp units (10 us)
 
 
-def signature(secret: bytes, signed_part: bytes | bytearray) -> bytes:
+def signature(secret: bytes, signed_part: bytes | bytearray | memoryview) -> bytes:
     """The 6-byte signature of a frame: ``signed_part`` runs from the start marker to the
     signature's timestamp (MAVLink 2 signing: first 48 bits of SHA-256(secret + part))."""
     return hashlib.sha256(secret + bytes(signed_part)).digest()[:6]

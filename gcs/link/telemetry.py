@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass
 from enum import IntEnum
 
@@ -162,7 +163,7 @@ class TelemetryStore:
         self.imu: Imu | None = None
         self.status: SystemStatus | None = None
         self._texts: deque[StatusText] = deque(maxlen=status_text_history)
-        self._handlers = {
+        self._handlers: dict[str, Callable[[MavMessage, float], Record]] = {
             "HEARTBEAT": self._heartbeat,
             "LOCAL_POSITION_NED": self._position,
             "ATTITUDE": self._attitude,

@@ -204,7 +204,7 @@ def declare_alive(session: zenoh.Session, *, fleet: str, sysid: int) -> zenoh.Li
 
 
 def watch_alive(session: zenoh.Session, *, fleet: str,
-                on_change: Callable[[int, bool], None]) -> zenoh.Subscriber:
+                on_change: Callable[[int, bool], object]) -> zenoh.Subscriber:
     """Call ``on_change(sysid, alive)`` when a vehicle token of ``fleet`` appears or vanishes.
 
     Tokens that already exist are reported at once (history). Runs on zenoh's
