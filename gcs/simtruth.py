@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
+from typing import Any
 
 __all__ = ["SimTruth"]
 
@@ -34,14 +35,27 @@ class SimTruth:
 
     @classmethod
     def from_bytes(cls, data: bytes) -> SimTruth:
-        """Decode; ValueError (naming the fault) on a malformed sample."""
+        """Decode; ValueError (naming the fault) on a malformed sample: vectors of three,
+        one position and one rope tension per vehicle id."""
         try:
             d = json.loads(data)
-            return cls(t=float(d["t"]), ids=tuple(int(i) for i in d["ids"]),
-                       vehicle_p_ned=tuple(tuple(float(x) for x in p)  # type: ignore[misc]
-                                           for p in d["vehicle_p_ned"]),
-                       payload_p_ned=tuple(float(x) for x in d["payload_p_ned"]),  # type: ignore[arg-type]
-                       payload_v_ned=tuple(float(x) for x in d["payload_v_ned"]),  # type: ignore[arg-type]
-                       rope_tension=tuple(float(x) for x in d["rope_tension"]))
+            ids = tuple(int(i) for i in d["ids"])
+            vehicles = tuple(_vec3(p, "vehicle_p_ned") for p in d["vehicle_p_ned"])
+            tensions = tuple(float(x) for x in d["rope_tension"])
+            for name, values in (("vehicle_p_ned", vehicles), ("rope_tension", tensions)):
+                if len(values) != len(ids):
+                    raise ValueError(f"{name}: {len(values)} entries for {len(ids)} vehicles")
+            return cls(t=float(d["t"]), ids=ids, vehicle_p_ned=vehicles,
+                       payload_p_ned=_vec3(d["payload_p_ned"], "payload_p_ned"),
+                       payload_v_ned=_vec3(d["payload_v_ned"], "payload_v_ned"),
+                       rope_tension=tensions)
         except (ValueError, KeyError, TypeError) as exc:
             raise ValueError(f"malformed sim truth sample: {exc}") from None
+
+
+def _vec3(values: Any, name: str) -> tuple[float, float, float]:
+    """Three floats from a JSON list, or ValueError naming the field."""
+    v = tuple(float(x) for x in values)
+    if len(v) != 3:
+        raise ValueError(f"{name}: {len(v)} values, not 3")
+    return v[0], v[1], v[2]
