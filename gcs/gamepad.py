@@ -36,6 +36,8 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from types import ModuleType
+from typing import Any
 
 from gcs.clock import Clock
 from gcs.operator import OperatorCommand
@@ -284,7 +286,7 @@ class Gamepad:
             pygame.joystick.quit()
             pygame.display.quit()
 
-    def _poll(self, pygame, period: float) -> None:  # type: ignore[no-untyped-def]
+    def _poll(self, pygame: ModuleType, period: float) -> None:
         """One read of the pad; every step guarded on its own, so a fault in one event
         (or in the axes) neither ends the thread nor drops the other events."""
         try:
@@ -340,7 +342,7 @@ class Gamepad:
         except Exception as exc:
             self._fault("centring the sticks", exc)
 
-    def _event(self, pygame, event) -> None:  # type: ignore[no-untyped-def]
+    def _event(self, pygame: ModuleType, event: Any) -> None:
         if event.type == pygame.JOYDEVICEADDED and self._pad is None:
             self._open(pygame, event.device_index)
         elif event.type == pygame.JOYDEVICEREMOVED and event.instance_id == self._pad_id:
@@ -350,13 +352,13 @@ class Gamepad:
         elif event.type == pygame.JOYBUTTONDOWN and event.instance_id == self._pad_id:
             self.mapper.button(event.button)
 
-    def _reopen(self, pygame) -> None:  # type: ignore[no-untyped-def]
+    def _reopen(self, pygame: ModuleType) -> None:
         """Use the first pad still plugged in that matches the config, if any."""
         for index in range(pygame.joystick.get_count()):
             if self._open(pygame, index):
                 return
 
-    def _open(self, pygame, index: int) -> bool:  # type: ignore[no-untyped-def]
+    def _open(self, pygame: ModuleType, index: int) -> bool:
         """Use joystick ``index`` if its name matches the config."""
         pad = pygame.joystick.Joystick(index)
         if self._config.device and self._config.device not in pad.get_name():
@@ -369,7 +371,7 @@ class Gamepad:
         return True
 
 
-def _event_name(pygame, event) -> str:  # type: ignore[no-untyped-def]
+def _event_name(pygame: ModuleType, event: Any) -> str:
     """The SDL event's name for a fault message (its number if pygame cannot name it)."""
     try:
         return str(pygame.event.event_name(event.type))

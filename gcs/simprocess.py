@@ -17,6 +17,7 @@ import sys
 import threading
 import time
 from pathlib import Path
+from typing import IO
 
 __all__ = ["SimProcess", "SimStartError", "free_tcp_port"]
 
@@ -80,7 +81,7 @@ class SimProcess:
                 detail = " | ".join(self._err[-5:]) or "no output"
                 raise SimStartError(f"the simulator {why} before it was ready: {detail}")
 
-    def _pump(self, stream, to_queue: bool) -> None:  # type: ignore[no-untyped-def]
+    def _pump(self, stream: IO[str], to_queue: bool) -> None:
         for line in stream:
             if to_queue:
                 self._lines.put(line)
