@@ -38,6 +38,7 @@ Targets: at most 1 ms per tick for 100 vehicles; jitter p99 at most 2 ms.
 
 from __future__ import annotations
 
+import argparse
 import json
 import math
 import subprocess
@@ -193,15 +194,22 @@ def numpy_call_cost(pause: float, count: int = 40) -> float:
 
 
 def main() -> None:
-    if len(sys.argv) in (4, 5) and sys.argv[1] == "--play":
-        play(sys.argv[2], sys.argv[3], background=sys.argv[4:] == [_BACKGROUND])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("seconds", nargs="?", type=float, default=30.0,
+                        help="wall seconds measured per team size (default 30)")
+    parser.add_argument(_BACKGROUND, dest="background", action="store_true",
+                        help="the vehicles' process publishes as `gcs sim --background` steps")
+    # the script's own child processes
+    parser.add_argument("--play", nargs=2, metavar=("TEAM", "ENDPOINT"), help=argparse.SUPPRESS)
+    parser.add_argument("--floor", type=float, metavar="S", help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.play is not None:
+        play(args.play[0], args.play[1], background=args.background)
         return
-    if len(sys.argv) == 3 and sys.argv[1] == "--floor":
-        print(json.dumps(sleep_floor(float(sys.argv[2]))))
+    if args.floor is not None:
+        print(json.dumps(sleep_floor(args.floor)))
         return
-    background = _BACKGROUND in sys.argv[1:]
-    numbers = [a for a in sys.argv[1:] if a != _BACKGROUND]
-    seconds = float(numbers[0]) if numbers else 30.0
+    background, seconds = args.background, args.seconds
     out: dict[str, object] = {"sleep_floor_ms_p99": sleep_floor(),
                               "numpy_call_us_back_to_back": numpy_call_cost(0.0),
                               "numpy_call_us_after_50ms_sleep": numpy_call_cost(0.05),
