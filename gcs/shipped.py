@@ -35,10 +35,11 @@ def _candidates() -> list[Path]:
 
 def shipped_configs() -> Path:
     """The shipped configs directory (the checkout's when there is one)."""
-    for directory in _candidates():
+    candidates = _candidates()
+    for directory in candidates:
         if (directory / "airframes").is_dir():
             return directory
-    return _candidates()[0]  # nothing installed: errors then name the checkout's path
+    return candidates[0]  # nothing installed: errors then name the checkout's path
 
 
 def shipped_config(relative: str | Path) -> Path:

@@ -12,7 +12,7 @@ import json
 from dataclasses import dataclass
 from typing import Any
 
-__all__ = ["SimTruth"]
+__all__ = ["SimTruth", "vec3"]
 
 
 @dataclass(frozen=True)
@@ -40,21 +40,22 @@ class SimTruth:
         try:
             d = json.loads(data)
             ids = tuple(int(i) for i in d["ids"])
-            vehicles = tuple(_vec3(p, "vehicle_p_ned") for p in d["vehicle_p_ned"])
+            vehicles = tuple(vec3(p, "vehicle_p_ned") for p in d["vehicle_p_ned"])
             tensions = tuple(float(x) for x in d["rope_tension"])
             for name, values in (("vehicle_p_ned", vehicles), ("rope_tension", tensions)):
                 if len(values) != len(ids):
                     raise ValueError(f"{name}: {len(values)} entries for {len(ids)} vehicles")
             return cls(t=float(d["t"]), ids=ids, vehicle_p_ned=vehicles,
-                       payload_p_ned=_vec3(d["payload_p_ned"], "payload_p_ned"),
-                       payload_v_ned=_vec3(d["payload_v_ned"], "payload_v_ned"),
+                       payload_p_ned=vec3(d["payload_p_ned"], "payload_p_ned"),
+                       payload_v_ned=vec3(d["payload_v_ned"], "payload_v_ned"),
                        rope_tension=tensions)
         except (ValueError, KeyError, TypeError) as exc:
             raise ValueError(f"malformed sim truth sample: {exc}") from None
 
 
-def _vec3(values: Any, name: str) -> tuple[float, float, float]:
-    """Three floats from a JSON list, or ValueError naming the field."""
+def vec3(values: Any, name: str = "vector") -> tuple[float, float, float]:
+    """Three floats from a sequence (a JSON list, a numpy row), or ValueError naming the
+    field: the one conversion of every producer of a :class:`SimTruth`."""
     v = tuple(float(x) for x in values)
     if len(v) != 3:
         raise ValueError(f"{name}: {len(v)} values, not 3")

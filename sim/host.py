@@ -37,7 +37,7 @@ import numpy as np
 
 from gcs.config import Team
 from gcs.link.signing import SigningKey, load_signing_key
-from gcs.simtruth import SimTruth
+from gcs.simtruth import SimTruth, vec3
 from sim.config import WorldConfig
 from sim.control import ControlAction, parse_control
 from sim.fabric import HostFabric
@@ -249,8 +249,8 @@ class SimHost:
         w = self._world
         return SimTruth(
             t=w.t, ids=self._sysids,
-            vehicle_p_ned=tuple((float(p[0]), float(p[1]), float(p[2])) for p in w.p_ned),
-            payload_p_ned=_vec3(w.payload_p_ned), payload_v_ned=_vec3(w.payload_v_ned),
+            vehicle_p_ned=tuple(vec3(p) for p in w.p_ned),
+            payload_p_ned=vec3(w.payload_p_ned), payload_v_ned=vec3(w.payload_v_ned),
             rope_tension=tuple(float(x) for x in w.rope_tension))
 
     # -- events ---------------------------------------------------------------------------------
@@ -330,5 +330,3 @@ def _signing_keys(team: Team) -> dict[int, SigningKey]:
     return out
 
 
-def _vec3(a: np.ndarray) -> tuple[float, float, float]:
-    return float(a[0]), float(a[1]), float(a[2])

@@ -23,7 +23,7 @@ import numpy as np
 from gcs.fleet import FleetState
 from gcs.flightlog import FlightLog, Track, tilt_angle
 from gcs.phases import Phase
-from gcs.simtruth import SimTruth
+from gcs.simtruth import SimTruth, vec3
 from web.frame import TeamView
 
 __all__ = ["ReplayCursor", "ReplayEvent", "ReplayState", "replay_view"]
@@ -152,9 +152,8 @@ class ReplayCursor:
         true_p = arrays.get("veh_true")
         p = true_p[: 3 * n].reshape(n, 3) if true_p is not None else np.full((n, 3), np.nan)
         return SimTruth(t=t, ids=self.ids,
-                        vehicle_p_ned=tuple(tuple(float(x) for x in r) for r in p),  # type: ignore[misc]
-                        payload_p_ned=tuple(float(x) for x in payload[:3]),  # type: ignore[arg-type]
-                        payload_v_ned=tuple(float(x) for x in payload[3:6]),  # type: ignore[arg-type]
+                        vehicle_p_ned=tuple(vec3(r) for r in p),
+                        payload_p_ned=vec3(payload[:3]), payload_v_ned=vec3(payload[3:6]),
                         rope_tension=tuple(float(x) for x in rope[:n]))
 
 
