@@ -8,7 +8,7 @@ fresh telemetry of every vehicle and sends every vehicle a setpoint. The
 runtime is put in formation flight directly (the phase machine is not what is
 measured). With ``--vehicles-in-background`` the vehicles' process publishes
 as a sim host started with ``--background`` steps (in the background while on
-schedule, :mod:`sim.priority`). Prints one JSON object on its last line: per-tick compute time
+schedule, :mod:`sim._priority`). Prints one JSON object on its last line: per-tick compute time
 (wall: p50, p99, max, ms; and the loop thread's CPU time, p50 and p99, ms,
 which leaves out time the thread spent preempted or waiting for the GIL), the
 same tick run 200 times back to back (``tick_warm_ms_p50``: the code's own cost
@@ -51,15 +51,13 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from gcs.app import GcsApp
+from gcs.app import GcsApp, free_tcp_port
 from gcs.config import load_team
-from gcs.link import keys
-from gcs.link.encoder import MavlinkEncoder
-from gcs.link.zenoh_session import ZenohSettings, open_session
-from gcs.phases import Phase
-from gcs.simprocess import free_tcp_port
-from sim.host import LIFT_LAG_S
-from sim.priority import BackgroundStepping
+from gcs.loop import Phase
+from gcs.transport import ZenohSettings, open_session
+from gcs.wire import MavlinkEncoder, keys
+from sim import BackgroundStepping
+from sim._host import LIFT_LAG_S
 
 ROOT = Path(__file__).resolve().parents[1]
 _TELEMETRY_PERIOD_S = 0.05

@@ -27,18 +27,19 @@ from collections import Counter
 
 import numpy as np
 
-from sim.config import load_world_config
-from sim.layout import Layout, paper_square, ring_layout
-from sim.scenario import (
+from gcs.wire import SimMode
+from sim import (
     DEFAULT_AIRFRAME,
     DEFAULT_AUTOPILOT_CONFIG,
     DEFAULT_WORLD_CONFIG,
+    Layout,
     build_team,
+    load_world_config,
+    paper_square,
+    ring_layout,
     take_off,
 )
-from vehicles.airframe import load_airframe
-from vehicles.config import load_autopilot_config
-from vehicles.modes import Mode
+from vehicles import load_airframe, load_autopilot_config
 
 TARGETS = {"4+payload": 100.0, "16": None, "64": 5.0}
 """Required real-time factors (None: reported only)."""
@@ -75,7 +76,7 @@ def measure(layout: Layout, sim_seconds: float, seed: int) -> tuple[float, float
         world.run(autopilot, chunk)
         send((k + 1) * chunk)
     wall = time.perf_counter() - wall
-    left = [(i, m.name) for i, m in enumerate(autopilot.modes) if m != Mode.OFFBOARD]
+    left = [(i, m.name) for i, m in enumerate(autopilot.modes) if m != SimMode.OFFBOARD]
     if left:
         modes = Counter(mode for _, mode in left)
         now_in = ", ".join(f"{count} in {mode}" for mode, count in modes.items())

@@ -8,7 +8,7 @@ Two measurements per team size, each with one real websocket viewer attached
 (``web.wireviewer.WireViewer``):
 
 * **frame cost** (server side): a real viser server and the page's scene
-  (``web.scene.SceneView``), the team moving every frame (positions,
+  (``web._scene.SceneView``), the team moving every frame (positions,
   headings, velocities, rope tensions all change: the worst case for viser's
   send-only-what-changed), frames back to back. Reported: building the
   frame's arrays and handing them to viser (median and p99, ms) and the
@@ -16,7 +16,7 @@ Two measurements per team size, each with one real websocket viewer attached
   own thread). The viewer here reads and discards (``decode=False``): it
   shares the measured process, and decoding there would be counted in the
   CPU time and compete with the timed frames for the GIL.
-* **received rate**: the real page (``web.ui.WebUi``: scene, status and plots,
+* **received rate**: the real page (``web._ui.WebUi``: scene, status and plots,
   the viewer's panel and camera follow) of a real ``GcsApp`` whose telemetry
   and simulator truth are a moving team fed into its fleet table (no
   simulator: 100 simulated vehicles would measure the simulator). The viewer
@@ -45,18 +45,13 @@ from pathlib import Path
 import numpy as np
 import viser
 
-from gcs.analysis import analyze
-from gcs.app import GcsApp
+from gcs.app import GcsApp, free_tcp_port
 from gcs.config import Team, load_team
-from gcs.fleet import FleetState, FleetTable
-from gcs.link.zenoh_session import ZenohSettings
-from gcs.simprocess import free_tcp_port
-from gcs.simtruth import SimTruth
-from web.frame import TeamView, build_frame
-from web.quadmesh import quad_mesh
-from web.scene import SceneView
-from web.trails import Trails
-from web.ui import UI_RATE_HZ, WebUi
+from gcs.guidance import analyze
+from gcs.loop import FleetState, FleetTable
+from gcs.transport import ZenohSettings
+from gcs.wire import SimTruth
+from web import UI_RATE_HZ, SceneView, TeamView, Trails, WebUi, build_frame, quad_mesh
 from web.wireviewer import WireViewer
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -12,7 +12,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from gcs.typed_config import ConfigError
+from gcs.common import ConfigError
 
 if TYPE_CHECKING:
     from gcs.flightlog import FlightLog
@@ -21,12 +21,12 @@ __all__ = ["main"]
 
 
 def _cmd_analyze(args: argparse.Namespace) -> int:
-    from gcs.analysis import analyze, dumps, format_report
     from gcs.config import load_team
+    from gcs.guidance import analysis_json, analyze, format_report
 
     team = load_team(args.config)
     result = analyze(team)
-    print(dumps(result) if args.json else format_report(result, team.source))
+    print(analysis_json(result) if args.json else format_report(result, team.source))
     return 0 if result.ok else 1
 
 
@@ -43,9 +43,8 @@ def _cmd_fly(args: argparse.Namespace) -> int:
     import json
     from pathlib import Path
 
+    from gcs.app import fly, load_scenario
     from gcs.config import load_team
-    from gcs.fly import fly
-    from gcs.scenario import load_scenario
 
     team = load_team(args.config)
     scenario = load_scenario(args.scenario)
@@ -78,8 +77,7 @@ def _load_log(path: Path, command: str, *, quiet: bool) -> FlightLog | None:
     """
     from tqdm import tqdm
 
-    from gcs.flightlog import FlightLog
-    from gcs.logreader import LogError
+    from gcs.flightlog import FlightLog, LogError
 
     bars: dict[str, tqdm] = {}
 
@@ -108,7 +106,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
 
     from tqdm import tqdm
 
-    from gcs.report import write_report
+    from gcs.flightlog import write_report
 
     path = Path(args.file)
     out = Path(args.out) if args.out else path.with_suffix("").with_name(path.stem + "_report")
@@ -146,7 +144,7 @@ def _os_error(exc: OSError, path: object) -> str:
 
 def _default_team() -> str:
     """configs/bebop_square.yaml here, or the shipped one (run from anywhere)."""
-    from gcs.shipped import default_config
+    from gcs.common import default_config
 
     return str(default_config("bebop_square.yaml"))
 
@@ -154,7 +152,7 @@ def _default_team() -> str:
 def _cmd_demo(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from web.launch import run_demo
+    from web import run_demo
 
     return run_demo(args.config or _default_team(), host=args.host, port=args.port,
                     gamepad=Path(args.gamepad) if args.gamepad else None,
@@ -164,7 +162,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 def _cmd_run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from web.launch import run_gcs
+    from web import run_gcs
 
     return run_gcs(args.config, host=args.host, port=args.port,
                    record=Path(args.record) if args.record else None,
@@ -173,7 +171,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 
 def _cmd_replay(args: argparse.Namespace) -> int:
-    from web.replay_page import run_replay
+    from web import run_replay
 
     path = Path(args.file)
     log = _load_log(path, "replay", quiet=args.quiet)

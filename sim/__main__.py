@@ -17,15 +17,15 @@ import signal
 import sys
 from collections.abc import Sequence
 
+from gcs.common import ConfigError
 from gcs.config import load_team
-from gcs.link.zenoh_session import DEFAULT_ENDPOINT
-from gcs.typed_config import ConfigError
-from sim.config import load_world_config
-from sim.host import SimHost
-from sim.options import HostOptions
-from sim.scenario import DEFAULT_AUTOPILOT_CONFIG, DEFAULT_WORLD_CONFIG
-from sim.udp import DEFAULT_BASE_PORT, DEFAULT_GCS_PORT
-from vehicles.config import load_autopilot_config
+from gcs.transport import DEFAULT_ENDPOINT
+from sim._config import load_world_config
+from sim._host import SimHost
+from sim._options import HostOptions
+from sim._ready_team import DEFAULT_AUTOPILOT_CONFIG, DEFAULT_WORLD_CONFIG
+from sim._udp import DEFAULT_BASE_PORT, DEFAULT_GCS_PORT
+from vehicles import load_autopilot_config
 
 __all__ = ["main"]
 

@@ -13,12 +13,8 @@ from typing import Any
 
 from pymavlink import mavutil
 
-from gcs.flightlog import EARTH_RADIUS_M
-from gcs.link.dialect import mavlink
-from gcs.link.encoder import MavlinkEncoder
-from gcs.link.modes import CUSTOM_MODE_ENABLED, SAFETY_ARMED
-from gcs.logreader import TlogIndex
-from gcs.recorder import TlogRecorder
+from gcs.flightlog import EARTH_RADIUS_M, TlogIndex, TlogRecorder
+from gcs.wire import CUSTOM_MODE_ENABLED, SAFETY_ARMED, MavlinkEncoder, mavlink
 
 VEHICLES = (1, 2, 3, 4)
 """The system ids of the short flight's vehicles (configs/bebop_square.yaml)."""

@@ -13,30 +13,39 @@ import pytest
 import yaml
 from scipy.signal import freqz, lfilter
 
-from sim.config import load_world_config
-from sim.dynamics import physics_step
-from sim.layout import Layout, paper_square
-from sim.scenario import (
+from gcs.wire import SimMode
+from sim import (
     DEFAULT_AIRFRAME,
     DEFAULT_AUTOPILOT_CONFIG,
     DEFAULT_WORLD_CONFIG,
+    Layout,
+    World,
     build_team,
+    load_world_config,
+    paper_square,
+    physics_step,
     take_off,
 )
-from sim.world import World
 from tests.test_autopilot_modes import solo
 from tests.test_sim_world import aloft
-from vehicles.airframe import load_airframe
-from vehicles.autopilot import Autopilot
-from vehicles.butterworth import biquad_reset, biquad_step, butterworth2
-from vehicles.config import load_autopilot_config
-from vehicles.estimator import estimate_step
-from vehicles.indi import acceleration_increment, g_matrix, rotor_thrust_increment
-from vehicles.kernel import _attitude_indi, _filter_step
-from vehicles.modes import Mode
-from vehicles.quaternion import euler_from_quaternions, euler_to_quat, quat_to_rotation
-from vehicles.references import altitude_pd
-from vehicles.rotors import effectiveness_matrix
+from vehicles import (
+    Autopilot,
+    acceleration_increment,
+    altitude_pd,
+    biquad_reset,
+    biquad_step,
+    butterworth2,
+    effectiveness_matrix,
+    estimate_step,
+    euler_from_quaternions,
+    euler_to_quat,
+    g_matrix,
+    load_airframe,
+    load_autopilot_config,
+    quat_to_rotation,
+    rotor_thrust_increment,
+)
+from vehicles._kernel import _attitude_indi, _filter_step
 
 RNG = np.random.default_rng(2019)
 
@@ -190,7 +199,7 @@ def step_response(request: pytest.FixtureRequest) -> StepResponse:
         # The estimate the last control step used is still in the state.
         pdalt = kp * (z_hold - autopilot.p_ned[:, 2]) - kv * autopilot.v_ned[:, 2]
         residual.append(autopilot.accel_ref_ned[:, 2] - pdalt)
-    assert all(m == Mode.OFFBOARD for m in autopilot.modes)
+    assert all(m == SimMode.OFFBOARD for m in autopilot.modes)
     return StepResponse(np.array(accel), np.array(z_error), np.array(residual))
 
 
@@ -244,7 +253,7 @@ def test_a_3d_acceleration_setpoint_is_flown_and_its_loss_falls_back_to_hold() -
         for _ in range(round(autopilot.rate_hz)):
             autopilot.set_accel_setpoint(0, command)
             last_setpoint = autopilot.t
-            if autopilot.mode(0) != Mode.OFFBOARD:
+            if autopilot.mode(0) != SimMode.OFFBOARD:
                 assert autopilot.start_offboard(0).accepted
             world.run(autopilot, period)
             np.testing.assert_array_equal(autopilot.accel_ref_ned[0], command)
@@ -262,9 +271,9 @@ def test_a_3d_acceleration_setpoint_is_flown_and_its_loss_falls_back_to_hold() -
         reached = np.argmax(response >= 1.0 - math.exp(-1.0), axis=0) * period
         assert np.all(reached > 0.0) and np.all(reached < [0.18, 0.18, 0.06]), reached
     # The stream stops: HOLD at the first control step after 0.5 s.
-    while autopilot.mode(0) == Mode.OFFBOARD and autopilot.t - last_setpoint < 1.0:
+    while autopilot.mode(0) == SimMode.OFFBOARD and autopilot.t - last_setpoint < 1.0:
         world.run(autopilot, period)
-    assert autopilot.mode(0) == Mode.HOLD
+    assert autopilot.mode(0) == SimMode.HOLD
     assert 0.5 < autopilot.t - last_setpoint <= 0.5 + 1.5 * period
 
 
@@ -369,7 +378,7 @@ def ask_too_much(world: World, autopilot: Autopilot, accel_xy: tuple[float, floa
     for _ in range(256):  # 0.5 s at 512 Hz
         for i in range(world.n_vehicles):
             autopilot.set_accel_xy_pos_z_setpoint(i, accel_xy, z_ned[i])
-            if autopilot.mode(i) != Mode.OFFBOARD:
+            if autopilot.mode(i) != SimMode.OFFBOARD:
                 assert autopilot.start_offboard(i).accepted
         world.run(autopilot, 1.0 / 512.0)
         roll_pitch.append(euler_from_quaternions(world.state.q_wxyz)[:, :2])

@@ -8,20 +8,26 @@ import math
 import numpy as np
 import pytest
 
-from sim.config import load_world_config
-from sim.layout import Layout, paper_square
-from sim.scenario import (
+from gcs.wire import SetpointKind, SimMode
+from sim import (
     DEFAULT_AIRFRAME,
     DEFAULT_AUTOPILOT_CONFIG,
     DEFAULT_WORLD_CONFIG,
+    Layout,
+    World,
     build_team,
+    load_world_config,
+    paper_square,
     take_off,
 )
-from sim.world import World
-from vehicles.airframe import load_airframe
-from vehicles.autopilot import Autopilot
-from vehicles.config import AutopilotConfig, load_autopilot_config
-from vehicles.modes import CommandResult, Denial, Mode, SetpointKind
+from vehicles import (
+    Autopilot,
+    AutopilotConfig,
+    Denial,
+    RequestOutcome,
+    load_airframe,
+    load_autopilot_config,
+)
 
 SOLO = Layout(np.zeros((1, 3)), np.array([20.0]), np.array([0.0, 3.0, 0.0]))
 """One vehicle whose rope is too long to ever pull."""
@@ -34,31 +40,31 @@ def solo(config: AutopilotConfig | None = None) -> tuple[World, Autopilot]:
                       autopilot_config=config or load_autopilot_config(DEFAULT_AUTOPILOT_CONFIG))
 
 
-def denied(reason: Denial) -> CommandResult:
-    return CommandResult(False, reason)
+def denied(reason: Denial) -> RequestOutcome:
+    return RequestOutcome(False, reason)
 
 
 def test_modes_and_results_read_as_text() -> None:
-    texts = {m.text for m in Mode} | {k.text for k in SetpointKind}
-    assert len(texts) == len(Mode) + len(SetpointKind) and all(texts)
-    assert CommandResult(True).text == "accepted"
+    texts = {m.text for m in SimMode} | {k.text for k in SetpointKind}
+    assert len(texts) == len(SimMode) + len(SetpointKind) and all(texts)
+    assert RequestOutcome(True).text == "accepted"
     assert denied(Denial.DISARMED).text == "denied: vehicle is disarmed"
     with pytest.raises(ValueError):
-        CommandResult(False)
+        RequestOutcome(False)
 
 
 def test_commands_are_acknowledged_or_denied_with_a_reason() -> None:
     world, autopilot = solo()
     assert autopilot.arm(0) == denied(Denial.NO_POSE)  # nothing measured yet
     world.run(autopilot, 0.125)
-    assert autopilot.mode(0) == Mode.DISARMED and not autopilot.armed[0]
+    assert autopilot.mode(0) == SimMode.DISARMED and not autopilot.armed[0]
     for command in (lambda: autopilot.takeoff(0, 1.0), lambda: autopilot.land(0),
                     lambda: autopilot.hold(0), lambda: autopilot.start_offboard(0)):
         assert command() == denied(Denial.DISARMED)
     assert autopilot.disarm(0).accepted  # already disarmed
 
     assert autopilot.arm(0).accepted
-    assert autopilot.mode(0) == Mode.HOLD and autopilot.armed[0]
+    assert autopilot.mode(0) == SimMode.HOLD and autopilot.armed[0]
     assert autopilot.arm(0).accepted  # already armed
     world.run(autopilot, 1.0)
     assert world.p_ned[0, 2] == pytest.approx(0.0, abs=0.002)  # idling on the ground
@@ -68,19 +74,19 @@ def test_commands_are_acknowledged_or_denied_with_a_reason() -> None:
     assert autopilot.takeoff(0, math.nan) == denied(Denial.BAD_ALTITUDE)
 
     assert autopilot.takeoff(0, 1.2).accepted
-    assert autopilot.mode(0) == Mode.TAKEOFF
+    assert autopilot.mode(0) == SimMode.TAKEOFF
     world.run(autopilot, 6.0)
-    assert autopilot.mode(0) == Mode.HOLD
+    assert autopilot.mode(0) == SimMode.HOLD
     assert -world.p_ned[0, 2] == pytest.approx(1.2, abs=0.05)
     assert autopilot.disarm(0) == denied(Denial.IN_FLIGHT)
 
     autopilot.set_accel_xy_pos_z_setpoint(0, (0.0, 0.0), -1.2)
     assert autopilot.start_offboard(0).accepted
-    assert autopilot.mode(0) == Mode.OFFBOARD
+    assert autopilot.mode(0) == SimMode.OFFBOARD
 
     assert autopilot.disarm(0, force=True).accepted  # kill switch
     world.run(autopilot, 1.0)
-    assert autopilot.mode(0) == Mode.DISARMED
+    assert autopilot.mode(0) == SimMode.DISARMED
     assert np.all(world.rotor_speed[0] < 1.0)
     assert world.p_ned[0, 2] == pytest.approx(0.0, abs=0.01)  # fell down
 
@@ -96,9 +102,9 @@ def test_land_descends_and_disarms_on_touchdown() -> None:
         modes.append(autopilot.mode(0))
     descent = np.diff(heights[16:33]) * 16.0  # 1 to 2 s after the command
     assert descent.mean() == pytest.approx(-autopilot.config.land_speed, abs=0.1)
-    assert modes[-1] == Mode.DISARMED
-    first_disarmed = modes.index(Mode.DISARMED)
-    assert all(m == Mode.LAND for m in modes[:first_disarmed])
+    assert modes[-1] == SimMode.DISARMED
+    first_disarmed = modes.index(SimMode.DISARMED)
+    assert all(m == SimMode.LAND for m in modes[:first_disarmed])
     assert heights[first_disarmed] < 0.01
 
 
@@ -109,12 +115,12 @@ def test_hold_lands_after_the_hold_timeout() -> None:
     take_off(world, autopilot, 1.0)
     hold_start = float(autopilot.state.hold_start[0])
     period = 1.0 / autopilot.rate_hz
-    while autopilot.mode(0) == Mode.HOLD:
+    while autopilot.mode(0) == SimMode.HOLD:
         world.run(autopilot, period)
-    assert autopilot.mode(0) == Mode.LAND
+    assert autopilot.mode(0) == SimMode.LAND
     assert autopilot.t - hold_start == pytest.approx(2.0, abs=2 * period)
     world.run(autopilot, 6.0)
-    assert autopilot.mode(0) == Mode.DISARMED
+    assert autopilot.mode(0) == SimMode.DISARMED
 
 
 def test_lost_setpoint_stream_switches_to_hold_after_half_a_second() -> None:
@@ -144,7 +150,7 @@ def test_lost_setpoint_stream_switches_to_hold_after_half_a_second() -> None:
         world.run(autopilot, period)
         if round((autopilot.t - last_setpoint) / period) % 128 == 0:  # others keep 4 Hz
             stream([i for i in range(4) if i != lost])
-        if switched is None and autopilot.mode(lost) == Mode.HOLD:
+        if switched is None and autopilot.mode(lost) == SimMode.HOLD:
             switched = autopilot.t
             hold_point = autopilot.p_ned[lost]
     assert switched is not None

@@ -62,7 +62,7 @@ def test_each_command_has_its_own_help(command: str,
 @pytest.mark.parametrize("command", ["run", "demo"])
 def test_the_gamepad_help_names_both_default_mappings(command: str,
                                                       capsys: pytest.CaptureFixture[str]) -> None:
-    """As web.launch.default_gamepad reads them: the directory's own, else the shipped one."""
+    """As web._launch.default_gamepad reads them: the directory's own, else the shipped one."""
     with pytest.raises(SystemExit):
         main([command, "--help"])
     text = " ".join(capsys.readouterr().out.split())

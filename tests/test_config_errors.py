@@ -9,11 +9,11 @@ from typing import Any
 import pytest
 import yaml
 
-from gcs.analysis import analyze
 from gcs.config import ConfigError, load_team
-from gcs.gamepad import load_gamepad_config
+from gcs.guidance import analyze
+from gcs.loop import load_gamepad_config
 from tests.conftest import run_gcs
-from vehicles.airframe import BEBOP2, load_airframe
+from vehicles import BEBOP2, load_airframe
 
 SQUARE = Path("configs/bebop_square.yaml")
 

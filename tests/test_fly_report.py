@@ -17,11 +17,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
-from gcs import report
-from gcs.flightlog import FlightLog
-from gcs.link.modes import SAFETY_ARMED
-from gcs.logreader import TlogIndex
-from gcs.report import FIGURES
+from gcs.flightlog import FIGURES, FlightLog, TlogIndex
+from gcs.flightlog import _report as report
+from gcs.wire import SAFETY_ARMED
 from tests.conftest import SHORT, SQUARE, run_gcs
 from tests.logfiles import VEHICLES, plain_copy, raw_messages
 

@@ -6,16 +6,21 @@ import numpy as np
 import pytest
 
 from gcs.config import load_team
-from gcs.formation import build_formation, is_infinitesimally_rigid
+from gcs.formation import (
+    build_formation,
+    centripetal_matrix,
+    edges_to_slots,
+    is_infinitesimally_rigid,
+    motion_basis,
+)
 from gcs.guidance import (
     Guidance,
     MotionDemand,
     formation_acceleration,
     relative_measurements,
     saturate,
+    to_ned_saturated,
 )
-from gcs.motion import centripetal_matrix, edges_to_slots, motion_basis
-from gcs.udi import to_ned_saturated
 from tests.double_integrator import yaw_rotations
 
 SQUARE = "configs/bebop_square.yaml"

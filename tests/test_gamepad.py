@@ -22,20 +22,19 @@ from pathlib import Path
 
 import pytest
 
-from gcs.clock import WallClock
+from gcs.app import free_tcp_port
+from gcs.common import ConfigError, from_mapping
 from gcs.config import OperatorConfig, load_team
-from gcs.gamepad import (
+from gcs.loop import (
     AXES_RETRY_S,
     Gamepad,
     GamepadConfig,
     GamepadMapper,
+    OperatorCommand,
+    WallClock,
     load_gamepad_config,
 )
-from gcs.operator import OperatorCommand
-from gcs.simprocess import free_tcp_port
-from gcs.typed_config import ConfigError, from_mapping
-from web.control import ControlLock
-from web.launch import default_gamepad
+from web import ControlLock, default_gamepad
 
 ROOT = Path(__file__).resolve().parents[1]
 MAPPING = ROOT / "configs" / "gamepad.yaml"
@@ -440,7 +439,7 @@ def test_a_gcs_started_elsewhere_reads_the_pad(tmp_path: Path) -> None:
     """From a directory without configs/, the shipped mapping is still read.
 
     ``gcs run`` (no vehicles: its zenoh connects nowhere) rather than ``gcs demo``:
-    both start the reader the same way (``web.launch.serve``), and run needs no simulator.
+    both start the reader the same way (``web._launch.serve``), and run needs no simulator.
     """
     _sdl()  # skips without pygame's SDL
     config = ROOT / "configs" / "bebop_square.yaml"

@@ -8,8 +8,7 @@ import numpy as np
 import pytest
 
 from gcs.config import Team, load_team
-from gcs.guidance import Guidance, MotionDemand, relative_measurements
-from gcs.udi import finite_max_norm
+from gcs.guidance import Guidance, MotionDemand, finite_max_norm, relative_measurements
 from tests.double_integrator import fly, yaw_rotations
 
 TEAMS = ["configs/bebop_square.yaml", "configs/bebop_triangle.yaml",
@@ -81,7 +80,7 @@ def spin(g: Guidance, v0: np.ndarray, duration: float) -> tuple[np.ndarray, np.n
 
 
 def test_plain_eq_udi_at_4_hz_with_the_papers_gains_is_unstable_on_the_square() -> None:
-    """Why the guidance compensates the hold (gcs.guidance).
+    """Why the guidance compensates the hold (gcs.guidance._law).
 
     Without it, the square's stiffest shape mode (lambda = 4) under a 4 Hz
     zero-order hold has c2 lambda T / 2 = 0.275 > c1 = 0.17: it grows with a time
@@ -215,7 +214,7 @@ def test_kept_coefficients_follow_every_change_of_demand(guidance: Guidance) -> 
 
 
 def test_a_non_finite_command_becomes_zero_and_the_largest_norm_is_of_what_is_left() -> None:
-    """What the loop sends and the safety bound it checks (gcs.runtime)."""
+    """What the loop sends and the safety bound it checks (gcs.loop._runtime)."""
     accel = np.array([[3.0, 4.0], [np.nan, 1.0], [np.inf, -np.inf], [0.6, -0.8]])
     assert finite_max_norm(accel) == pytest.approx(5.0)
     assert np.array_equal(accel, [[3.0, 4.0], [0.0, 1.0], [0.0, 0.0], [0.6, -0.8]])

@@ -60,10 +60,10 @@ def installed(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
 def test_the_wheel_ships_the_configs(installed: tuple[Path, Path]) -> None:
     venv, work = installed
     python = str(venv / "bin" / "python")
-    probe = ("import gcs, gcs.cli, web.launch, sim.scenario, vehicles.airframe; "
+    probe = ("import gcs, gcs.cli, web._launch, sim._ready_team, vehicles._airframe; "
              "print(gcs.__file__); print(gcs.cli._default_team()); "
-             "print(web.launch.default_gamepad()); print(vehicles.airframe.BEBOP2); "
-             "print(sim.scenario.DEFAULT_WORLD_CONFIG)")
+             "print(web._launch.default_gamepad()); print(vehicles._airframe.BEBOP2); "
+             "print(sim._ready_team.DEFAULT_WORLD_CONFIG)")
     done = run([python, "-c", probe], cwd=work)
     assert done.returncode == 0, done.stderr
     package, team, pad, airframe, world = (Path(p) for p in done.stdout.split())
@@ -75,6 +75,16 @@ def test_the_wheel_ships_the_configs(installed: tuple[Path, Path]) -> None:
     assert world == shipped / "sim" / "default.yaml"
     for path in (team, pad, airframe, world, shipped / "scenarios" / "short_flight.yaml"):
         assert path.is_file(), path
+
+
+def test_the_wheel_ships_the_page_script(installed: tuple[Path, Path]) -> None:
+    venv, work = installed
+    probe = ("import web._browser_script as b; s = b.script_source(); "
+             "print(b.__file__); print(len(s), 'const CFG = {' in s)")
+    done = run([str(venv / "bin" / "python"), "-c", probe], cwd=work)
+    assert done.returncode == 0, done.stderr
+    module, size, filled = done.stdout.split()
+    assert Path(module).is_relative_to(venv) and int(size) > 5000 and filled == "True"
 
 
 def test_the_installed_commands_run_from_an_empty_directory(

@@ -21,26 +21,28 @@ import pytest
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as v20
 
+from gcs.config import LinkConfig
 from gcs.link import (
     DEFAULT_TELEMETRY_RATES_HZ,
-    MASK_ACCEL,
-    MASK_ACCEL_XY_POS_Z,
     ArduPilotProfile,
     CommandError,
     CommandResult,
-    CopterMode,
     Link,
-    LinkConfig,
     LinkError,
     LinkManager,
+    Px4Profile,
+    SimProfile,
+)
+from gcs.transport import MavutilTransport
+from gcs.wire import (
+    MASK_ACCEL,
+    MASK_ACCEL_XY_POS_Z,
+    CopterMode,
     LocalPosition,
-    MavutilTransport,
     Px4AutoSubMode,
     Px4MainMode,
-    Px4Profile,
     SigningKey,
     SimMode,
-    SimProfile,
     px4_custom_mode,
 )
 
@@ -53,7 +55,7 @@ LAND = v20.MAV_CMD_NAV_LAND
 AUTOPILOT = {"px4": v20.MAV_AUTOPILOT_PX4, "ardupilot": v20.MAV_AUTOPILOT_ARDUPILOTMEGA,
              "sim": v20.MAV_AUTOPILOT_GENERIC}
 INITIAL_MODE = {"px4": px4_custom_mode(Px4MainMode.POSCTL), "ardupilot": CopterMode.STABILIZE,
-                "sim": SimMode.IDLE}
+                "sim": SimMode.DISARMED}
 
 
 @dataclass
@@ -268,11 +270,11 @@ class ScriptedAutopilot(threading.Thread):
             return self._interval(msg)
         return v20.MAV_RESULT_UNSUPPORTED
 
-    # Simulated vehicles: modes of gcs.link.modes.SimMode.
+    # Simulated vehicles: modes of gcs.wire._modes.SimMode.
     def _sim_command(self, msg: Any) -> int:
         if msg.command == ARM:
             self.armed = msg.param1 == 1.0
-            self.custom_mode = SimMode.IDLE
+            self.custom_mode = SimMode.DISARMED
             return v20.MAV_RESULT_ACCEPTED
         if msg.command == TAKEOFF:
             if not self.armed or msg.param7 <= 0:
@@ -585,7 +587,7 @@ def test_sim_profile_sequence_and_custom_modes(udp_link: Link) -> None:
         profile.send_setpoint(accel_xy_ned=(0.1, 0.0), z_ned=-1.0)
         profile.land()
         profile.disarm()
-        assert profile.mode_text() == "IDLE"
+        assert profile.mode_text() == "DISARMED"
     finally:
         peer.stop()
     assert peer.violations == []

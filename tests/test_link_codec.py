@@ -8,21 +8,24 @@ import numpy as np
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as v20
 
-from gcs.link import (
+from gcs.wire import (
     DEFAULT_GCS_SYSTEM_ID,
     MASK_ACCEL,
     MASK_ACCEL_XY_POS_Z,
     SETPOINT_MESSAGE,
+    EncoderBatch,
     FrameDecoder,
     MavlinkEncoder,
     SetpointKind,
+    SetpointPacker,
+    SigningKey,
     accel_setpoint_fields,
     accel_setpoint_message,
+    frame_dtype,
+    packed_rows,
+    packed_setpoints,
     read_setpoint,
 )
-from gcs.link.encoder import EncoderBatch, frame_dtype, packed_rows
-from gcs.link.setpoints import SetpointPacker, packed_setpoints
-from gcs.link.signing import SigningKey
 
 
 def gcs_encoder() -> MavlinkEncoder:

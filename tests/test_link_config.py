@@ -7,18 +7,11 @@ from pathlib import Path
 import pytest
 import yaml
 
-from gcs.link import (
-    ZENOH,
-    GcsLinkConfig,
-    LinkConfig,
-    LinkError,
-    LinkManager,
-    MavutilTransport,
-    ProfileName,
-    links_from_list,
-    write_signing_key,
-)
-from gcs.typed_config import ConfigError, from_mapping
+from gcs.common import ConfigError, from_mapping
+from gcs.config import ZENOH, GcsLinkConfig, LinkConfig, links_from_list
+from gcs.link import LinkError, LinkManager, ProfileName
+from gcs.transport import MavutilTransport
+from gcs.wire import write_signing_key
 
 TEAM = """
 links:

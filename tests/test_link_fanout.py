@@ -11,18 +11,16 @@ import numpy as np
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as v20
 
-from gcs.link import (
+from gcs.link import Fanout, Link
+from gcs.transport import FrameDirection, MavutilTransport
+from gcs.wire import (
     MASK_ACCEL_XY_POS_Z,
     SETPOINT_MESSAGE,
     FrameDecoder,
-    FrameDirection,
-    Link,
     MavlinkEncoder,
     MavMessage,
-    MavutilTransport,
+    packed_setpoints,
 )
-from gcs.link.fanout import Fanout
-from gcs.link.setpoints import packed_setpoints
 
 N = 3
 

@@ -13,16 +13,9 @@ from dataclasses import dataclass
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as v20
 
-from gcs.link import (
-    FrameDecoder,
-    FrameDirection,
-    Link,
-    MavlinkEncoder,
-    MavMessage,
-    MavutilTransport,
-    Severity,
-    Telemetry,
-)
+from gcs.link import Link
+from gcs.transport import FrameDirection, MavutilTransport
+from gcs.wire import FrameDecoder, MavlinkEncoder, MavMessage, Severity, Telemetry
 
 
 @dataclass

@@ -5,31 +5,25 @@ from __future__ import annotations
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as v20
 
-from gcs.link import (
-    CommandError,
-    CommandResult,
+from gcs.link import CommandError, CommandResult, Discovery, Presence, PresenceSource, VerticalPd
+from gcs.transport import ZenohSettings, zenoh_config
+from gcs.wire import (
     CopterMode,
-    Discovery,
-    Presence,
-    PresenceSource,
     Px4AutoSubMode,
     Px4MainMode,
     SimMode,
-    VerticalPd,
-    ZenohSettings,
     command_name,
     message_id,
     message_name,
     px4_custom_mode,
     px4_mode_text,
-    zenoh_config,
 )
 
 
 def test_sim_modes_are_defined_once_and_readable() -> None:
     assert [(m.name, int(m)) for m in SimMode] == [
-        ("IDLE", 1), ("TAKEOFF", 2), ("HOLD", 3), ("OFFBOARD", 4), ("LAND", 5)]
-    assert SimMode.OFFBOARD.text == "tracking GCS acceleration setpoints"
+        ("DISARMED", 1), ("TAKEOFF", 2), ("HOLD", 3), ("OFFBOARD", 4), ("LAND", 5)]
+    assert SimMode.OFFBOARD.text == "tracking external acceleration setpoints"
 
 
 def test_px4_custom_mode_packing_matches_px4() -> None:

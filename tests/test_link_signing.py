@@ -11,17 +11,19 @@ from pathlib import Path
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as v20
 
-from gcs.link import (
+from gcs.common import ConfigError
+from gcs.link import Link
+from gcs.transport import MavutilTransport
+from gcs.wire import (
     FrameDecoder,
-    Link,
     MavlinkEncoder,
-    MavutilTransport,
+    SignatureCheck,
+    SignatureVerifier,
     SigningKey,
     load_signing_key,
+    signing_timestamp,
     write_signing_key,
 )
-from gcs.link.signing import SignatureCheck, SignatureVerifier, signing_timestamp
-from gcs.typed_config import ConfigError
 
 KEY = SigningKey(bytes(range(100, 132)))
 OTHER_KEY = SigningKey(bytes(range(1, 33)))

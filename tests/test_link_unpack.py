@@ -6,9 +6,7 @@ import numpy as np
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as v20
 
-from gcs.link import FrameDecoder, MavlinkEncoder
-from gcs.link.signing import SigningKey
-from gcs.link.unpack import unpack_v2
+from gcs.wire import FrameDecoder, MavlinkEncoder, SigningKey, unpack_v2
 
 _INT_RANGES = {"int8_t": (-128, 127), "uint8_t": (0, 255), "int16_t": (-32768, 32767),
                "uint16_t": (0, 65535), "int32_t": (-2**31, 2**31 - 1), "uint32_t": (0, 2**32 - 1),

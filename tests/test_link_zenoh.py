@@ -18,31 +18,29 @@ import pytest
 import zenoh
 from pymavlink.dialects.v20 import ardupilotmega as v20
 
-from gcs.link import (
-    CUSTOM_MODE_ENABLED,
-    SAFETY_ARMED,
-    AccelSetpoint,
-    FrameDecoder,
-    GcsLinkConfig,
-    Link,
-    LinkConfig,
-    LinkManager,
-    MavlinkEncoder,
-    Presence,
-    PresenceEvent,
-    PresenceSource,
-    SimMode,
-    SimProfile,
+from gcs.config import GcsLinkConfig, LinkConfig
+from gcs.link import Link, LinkManager, Presence, PresenceEvent, PresenceSource, SimProfile
+from gcs.transport import (
+    FleetReceiver,
     ZenohSettings,
     ZenohTransport,
     declare_alive,
-    keys,
     open_session,
-    read_setpoint,
     watch_alive,
 )
-from gcs.link.clockwire import ClockSample, decode_clock, encode_clock
-from gcs.link.zenoh_transport import FleetReceiver
+from gcs.wire import (
+    CUSTOM_MODE_ENABLED,
+    SAFETY_ARMED,
+    AccelSetpoint,
+    ClockSample,
+    FrameDecoder,
+    MavlinkEncoder,
+    SimMode,
+    decode_clock,
+    encode_clock,
+    keys,
+    read_setpoint,
+)
 
 FLEET = "linktest"
 
@@ -102,7 +100,7 @@ class ZenohVehicle:
         self.transport = ZenohTransport.for_vehicle(session, fleet=FLEET, sysid=sysid)
         self.token: zenoh.LivelinessToken | None = declare_alive(session, fleet=FLEET,
                                                                  sysid=sysid)
-        self.mode = SimMode.IDLE
+        self.mode = SimMode.DISARMED
         self.armed = False
         self.z_ned = 0.0
         self.commands: list[tuple[int, float, float, float]] = []

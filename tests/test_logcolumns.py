@@ -8,9 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gcs.link.dialect import mavlink
-from gcs.logcolumns import CHUNK, decode_columns, wire_dtype
-from gcs.logreader import TlogIndex
+from gcs.flightlog import CHUNK, TlogIndex, decode_columns, wire_dtype
+from gcs.wire import mavlink
 
 _NAMES = ("LOCAL_POSITION_NED", "SYS_STATUS", "DEBUG_FLOAT_ARRAY", "HEARTBEAT", "STATUSTEXT")
 

@@ -15,12 +15,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gcs.flightlog import FlightLog
-from gcs.link.dialect import mavlink
-from gcs.link.encoder import MavlinkEncoder
-from gcs.link.modes import CUSTOM_MODE_ENABLED, SAFETY_ARMED, SimMode
-from gcs.logreader import TlogIndex
-from gcs.recorder import TlogRecorder
+from gcs.flightlog import FlightLog, TlogIndex, TlogRecorder
+from gcs.wire import CUSTOM_MODE_ENABLED, SAFETY_ARMED, MavlinkEncoder, SimMode, mavlink
 from tests.logfiles import HOME, ardupilot_log, field_fix, raw_messages, true_position
 
 EPOCH = 1_700_000_000.0

@@ -6,8 +6,8 @@ import struct
 
 import numpy as np
 
-from gcs.link.dialect import mavlink
-from gcs.logscan import CRC_EXTRA, SCAN_FIELDS, scan_buffer, scan_records
+from gcs.flightlog import CRC_EXTRA, SCAN_FIELDS, scan_buffer, scan_records
+from gcs.wire import mavlink
 
 _T0_US = 1_700_000_000_000_000
 

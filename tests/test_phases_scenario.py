@@ -7,10 +7,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gcs.metrics import FlightMetrics, swing_angle
-from gcs.phases import Action, Phase, PhaseError, next_phase
-from gcs.scenario import load_scenario
-from gcs.typed_config import ConfigError
+from gcs.app import load_scenario
+from gcs.common import ConfigError
+from gcs.flightlog import FlightMetrics, swing_angle
+from gcs.loop import Action, Phase, PhaseError, next_phase
 
 
 def test_normal_flight_sequence() -> None:

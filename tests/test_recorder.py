@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 from pymavlink import mavutil
 
-from gcs.link.encoder import MavlinkEncoder
-from gcs.recorder import ARRAYS, TlogRecorder
+from gcs.flightlog import ARRAYS, TlogRecorder
+from gcs.wire import MavlinkEncoder
 from tests.logfiles import raw_messages
 
 EPOCH = 1_700_000_000.0

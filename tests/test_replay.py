@@ -28,20 +28,20 @@ import pytest
 import viser
 from viser import _messages as viser_messages
 
-from gcs.flightlog import FlightLog
-from gcs.link.dialect import mavlink
-from gcs.link.encoder import MavlinkEncoder
-from gcs.link.modes import SAFETY_ARMED, SimMode
-from gcs.logreader import TlogIndex
-from gcs.simprocess import free_tcp_port
+from gcs.app import free_tcp_port
+from gcs.flightlog import FlightLog, TlogIndex
+from gcs.wire import SAFETY_ARMED, MavlinkEncoder, SimMode, mavlink
 from tests.conftest import run_gcs
 from tests.logfiles import ardupilot_log, plain_copy, raw_messages, with_frame
-from web.actions import OperatorActions
-from web.control import ControlLock
-from web.panel import ControlPanel
-from web.replay import ReplayCursor
-from web.replay_page import ReplayUi, replay_summary_html
-from web.timeline import Timeline
+from web import (
+    ControlLock,
+    ControlPanel,
+    OperatorActions,
+    ReplayCursor,
+    ReplayUi,
+    Timeline,
+    replay_summary_html,
+)
 from web.wireviewer import WireViewer
 
 TIMELINE = {"Play", "Pause", "Speed", "Time (s)", "Event", "Jump to event", "Previous event",

@@ -12,16 +12,11 @@ from collections.abc import Iterator
 
 import pytest
 
-from gcs.app import GcsApp
-from gcs.clock import ClockStoppedError
+from gcs.app import GcsApp, Scenario, SimProcess, Step, free_tcp_port, play
 from gcs.config import load_team
-from gcs.link import keys
-from gcs.link.modes import SimMode
-from gcs.link.zenoh_session import ZenohSettings
-from gcs.phases import Action, Phase
-from gcs.safety import SafetyReason
-from gcs.scenario import Scenario, Step, play
-from gcs.simprocess import SimProcess, free_tcp_port
+from gcs.loop import Action, ClockStoppedError, Phase, SafetyReason
+from gcs.transport import ZenohSettings
+from gcs.wire import SimMode, keys
 
 TEAM = load_team("configs/bebop_square.yaml")
 

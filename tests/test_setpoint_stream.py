@@ -18,15 +18,12 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 
-from gcs.app import GcsApp
+from gcs.app import GcsApp, Scenario, SimProcess, Step, free_tcp_port, play
 from gcs.config import load_team
-from gcs.link.profile_sim import SimProfile
-from gcs.link.setpoints import SETPOINT_MESSAGE
-from gcs.link.transport import FrameDirection
-from gcs.link.zenoh_session import ZenohSettings
-from gcs.phases import Phase
-from gcs.scenario import Scenario, Step, play
-from gcs.simprocess import SimProcess, free_tcp_port
+from gcs.link import SimProfile
+from gcs.loop import Phase
+from gcs.transport import FrameDirection, ZenohSettings
+from gcs.wire import SETPOINT_MESSAGE
 
 TEAM = load_team("configs/bebop_square.yaml")
 

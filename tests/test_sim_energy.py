@@ -8,19 +8,19 @@ import math
 import numpy as np
 import pytest
 
-from sim.config import RopeConfig, load_world_config
-from sim.layout import ring_layout
-from sim.scenario import (
+from gcs.wire import SimMode
+from sim import (
     DEFAULT_AIRFRAME,
     DEFAULT_AUTOPILOT_CONFIG,
     DEFAULT_WORLD_CONFIG,
+    RopeConfig,
+    World,
     build_team,
+    load_world_config,
+    ring_layout,
     take_off,
 )
-from sim.world import World
-from vehicles.airframe import load_airframe
-from vehicles.config import load_autopilot_config
-from vehicles.modes import Mode
+from vehicles import load_airframe, load_autopilot_config
 
 PAYLOAD_MASS = 0.4
 
@@ -76,7 +76,7 @@ def test_a_swinging_payload_under_hovering_vehicles_loses_energy() -> None:
         for _ in range(32):  # 0.5 s at 64 Hz
             for i in range(2):
                 autopilot.set_accel_xy_pos_z_setpoint(i, (accel, 0.0), z_hold[i])
-                if autopilot.mode(i) != Mode.OFFBOARD:
+                if autopilot.mode(i) != SimMode.OFFBOARD:
                     assert autopilot.start_offboard(i).accepted
             world.run(autopilot, 1.0 / 64.0)
     for i in range(2):
@@ -92,7 +92,7 @@ def test_a_swinging_payload_under_hovering_vehicles_loses_energy() -> None:
         below = world.payload_p_ned[2] - world.p_ned[:, 2].mean()
         energy.append(0.5 * PAYLOAD_MASS * float(rel_v @ rel_v)
                       + PAYLOAD_MASS * config.gravity * (hang - below))
-    assert all(m == Mode.HOLD for m in autopilot.modes)
+    assert all(m == SimMode.HOLD for m in autopilot.modes)
     # Swing energy per 2 s window (about one pendulum period). The floor of
     # 3 mJ covers the rope stretch (0.4 mm under 2.2 N) that the rigid-rope
     # reference ignores and the noise-driven jitter of hovering.

@@ -16,20 +16,20 @@ from typing import NamedTuple
 import numpy as np
 import pytest
 
-from sim.config import SensorConfig, WindConfig, WorldConfig, load_world_config
-from sim.layout import paper_square
-from sim.scenario import (
+from sim import (
     DEFAULT_AIRFRAME,
     DEFAULT_AUTOPILOT_CONFIG,
     DEFAULT_WORLD_CONFIG,
+    SensorConfig,
+    WindConfig,
+    World,
+    WorldConfig,
     build_team,
+    load_world_config,
+    paper_square,
     take_off,
 )
-from sim.world import World
-from vehicles.airframe import load_airframe
-from vehicles.autopilot import Autopilot
-from vehicles.config import load_autopilot_config
-from vehicles.quaternion import quat_to_rotation
+from vehicles import Autopilot, load_airframe, load_autopilot_config, quat_to_rotation
 
 PAYLOAD_MASS = 0.4
 ROPE = math.sqrt(1.25)

@@ -13,15 +13,19 @@ from pathlib import Path
 
 import pytest
 
-import sim.priority
+import sim._priority
+from gcs.app import free_tcp_port
 from gcs.config import load_team
-from gcs.simprocess import free_tcp_port
-from sim.config import load_world_config
-from sim.host import SimHost
-from sim.options import HostOptions
-from sim.priority import BackgroundStepping, can_lift
-from sim.scenario import DEFAULT_AUTOPILOT_CONFIG, DEFAULT_WORLD_CONFIG
-from vehicles.config import load_autopilot_config
+from sim import (
+    DEFAULT_AUTOPILOT_CONFIG,
+    DEFAULT_WORLD_CONFIG,
+    BackgroundStepping,
+    HostOptions,
+    SimHost,
+    can_lift,
+    load_world_config,
+)
+from vehicles import load_autopilot_config
 
 CONFIG = Path(__file__).resolve().parents[1] / "configs" / "bebop_square.yaml"
 
@@ -96,7 +100,7 @@ def test_the_stepping_thread_is_lifted_while_behind_and_returns_when_ahead() -> 
 
 def test_a_thread_that_could_not_come_back_is_never_put_in_the_background(
         monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(sim.priority, "can_lift", lambda: False)
+    monkeypatch.setattr(sim._priority, "can_lift", lambda: False)
     started: list[bool] = []
     with _on_a_thread(lambda done: (started.append(
             BackgroundStepping(lambda: False).start()), done.wait(5.0))) as tid:
@@ -171,11 +175,11 @@ def test_the_command_line_asks_for_the_background_and_the_ready_line_says_so() -
 
 def test_a_host_that_may_not_lift_its_loop_says_so_and_steps_normally(
         monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture) -> None:
-    monkeypatch.setattr(sim.priority, "can_lift", lambda: False)
+    monkeypatch.setattr(sim._priority, "can_lift", lambda: False)
     host = _host(speed=1.0, background=True)
     seen: set[int] = set()
     try:
-        with caplog.at_level("WARNING", logger="sim.host"), \
+        with caplog.at_level("WARNING", logger="sim._host"), \
                 _on_a_thread(lambda done: host.run()) as tid:
             for _ in range(20):
                 seen.add(_policy(tid[0]))

@@ -7,20 +7,18 @@ import math
 import numpy as np
 import pytest
 
-from sim.config import load_world_config
-from sim.layout import paper_square
-from sim.ropes import rope_tension
-from sim.scenario import (
+from gcs.wire import SimMode
+from sim import (
     DEFAULT_AIRFRAME,
     DEFAULT_AUTOPILOT_CONFIG,
     DEFAULT_WORLD_CONFIG,
     build_team,
+    load_world_config,
+    paper_square,
+    rope_tension,
     take_off,
 )
-from vehicles.airframe import load_airframe
-from vehicles.config import load_autopilot_config
-from vehicles.modes import Mode
-from vehicles.quaternion import quat_to_rotation
+from vehicles import load_airframe, load_autopilot_config, quat_to_rotation
 
 K, C, L = 5000.0, 30.0, 1.0
 
@@ -89,7 +87,7 @@ def one_rope_slack() -> dict[str, np.ndarray]:
         tilts.append(math.acos(-thrust_axis[2]))
         lifts.append(np.sum(tension * -to_vehicle[:, 2] / dist))
         distances.append(dist)
-    assert autopilot.mode(0) == Mode.OFFBOARD
+    assert autopilot.mode(0) == SimMode.OFFBOARD
     return {"taut_before": taut_before, "tension": np.array(tensions), "tilt": np.array(tilts),
             "lift": np.array(lifts), "distance": np.array(distances),
             "rope": world.params.rope_length}

@@ -10,22 +10,33 @@ import numpy as np
 import pytest
 import yaml
 
-from gcs.typed_config import ConfigError
-from sim.config import SensorConfig, WindConfig, WorldConfig, load_world_config
-from sim.layout import paper_square, ring_layout
-from sim.scenario import (
+from gcs.common import ConfigError
+from gcs.wire import SimMode
+from sim import (
     DEFAULT_AIRFRAME,
     DEFAULT_AUTOPILOT_CONFIG,
     DEFAULT_WORLD_CONFIG,
+    SensorConfig,
+    WindConfig,
+    World,
+    WorldConfig,
     build_team,
+    load_world_config,
+    paper_square,
+    ring_layout,
     take_off,
 )
-from sim.world import World
-from vehicles.airframe import Airframe, bebop2, load_airframe
-from vehicles.autopilot import Autopilot
-from vehicles.config import AutopilotConfig, load_autopilot_config
-from vehicles.modes import Mode
-from vehicles.quaternion import euler_to_quat, quat_multiply, quat_to_rotation
+from vehicles import (
+    Airframe,
+    Autopilot,
+    AutopilotConfig,
+    bebop2,
+    euler_to_quat,
+    load_airframe,
+    load_autopilot_config,
+    quat_multiply,
+    quat_to_rotation,
+)
 
 
 def team(seed: int, config: WorldConfig | None = None) -> tuple[World, Autopilot]:
@@ -183,7 +194,7 @@ def test_steady_wind_deflects_the_hanging_payload_by_its_drag() -> None:
     for _ in range(12 * 64):  # 12 s, six pendulum periods, well inside the hold timeout
         world.run(autopilot, 1.0 / 64.0)
         offsets.append(world.payload_p_ned - world.p_ned.mean(axis=0))
-    assert all(m == Mode.HOLD for m in autopilot.modes)
+    assert all(m == SimMode.HOLD for m in autopilot.modes)
     drag = config.payload_drag_coefficient * wind
     deflection = hang * math.sin(math.atan(drag / (mass * config.gravity)))
     mean = np.mean(offsets, axis=0)

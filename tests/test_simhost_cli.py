@@ -23,10 +23,9 @@ import zenoh
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from gcs.link import ZenohSettings, keys, open_session
-from gcs.link.clockwire import decode_clock, encode_time
-from gcs.simprocess import free_tcp_port
-from gcs.simtruth import SimTruth
+from gcs.app import free_tcp_port
+from gcs.transport import ZenohSettings, open_session
+from gcs.wire import SimTruth, decode_clock, encode_time, keys
 from sim.__main__ import main as sim_main
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pytest
 
-from gcs.link import (
+from gcs.wire import (
     CUSTOM_MODE_ENABLED,
     MASK_ACCEL,
     MASK_ACCEL_XY_POS_Z,
@@ -29,22 +29,25 @@ from gcs.link import (
     accel_setpoint_message,
     mavlink,
 )
-from sim.config import load_world_config
-from sim.layout import paper_square
-from sim.scenario import (
+from sim import (
     DEFAULT_AIRFRAME,
     DEFAULT_AUTOPILOT_CONFIG,
     DEFAULT_WORLD_CONFIG,
+    World,
     build_team,
+    load_world_config,
+    paper_square,
 )
-from sim.world import World
-from vehicles.airframe import load_airframe
-from vehicles.autopilot import Autopilot
-from vehicles.battery import Battery, BatteryConfig
-from vehicles.config import load_autopilot_config
+from vehicles import (
+    Autopilot,
+    Battery,
+    BatteryConfig,
+    StreamSchedule,
+    TelemetryMessage,
+    load_airframe,
+    load_autopilot_config,
+)
 from vehicles.endpoint import VehicleEndpoint
-from vehicles.modes import Mode
-from vehicles.streams import StreamSchedule, TelemetryMessage
 
 SYSID = 7
 GCS = 245
@@ -130,7 +133,7 @@ def take_off(b: Bench, climb: float = 1.0) -> None:
     b.command(ARM, 1)
     b.command(TAKEOFF, 0, 0, 0, 0, 0, 0, climb)
     b.run(climb / 0.5 + 1.5)
-    assert b.autopilot.mode(0) is Mode.HOLD
+    assert b.autopilot.mode(0) is SimMode.HOLD
 
 
 def test_heartbeat_and_telemetry_stream_at_the_default_rates_in_sim_time() -> None:
@@ -147,7 +150,7 @@ def test_heartbeat_and_telemetry_stream_at_the_default_rates_in_sim_time() -> No
     assert counts["SYS_STATUS"] == pytest.approx(4, abs=1)
     hb = of_type(got, "HEARTBEAT")[-1]
     assert (hb.type, hb.autopilot) == (mavlink.MAV_TYPE_QUADROTOR, mavlink.MAV_AUTOPILOT_GENERIC)
-    assert hb.base_mode == CUSTOM_MODE_ENABLED and hb.custom_mode == SimMode.IDLE
+    assert hb.base_mode == CUSTOM_MODE_ENABLED and hb.custom_mode == SimMode.DISARMED
     assert hb.system_status == mavlink.MAV_STATE_STANDBY
     position = of_type(got, "LOCAL_POSITION_NED")[-1]
     assert position.time_boot_ms == pytest.approx(2000, abs=20)  # sim time, ms
@@ -218,7 +221,7 @@ def test_commands_are_acknowledged_with_the_result_a_real_autopilot_gives() -> N
     b.command(ARM, 0, 21196)  # forced: the kill switch
     assert acks(b.received()) == [(mavlink.MAV_CMD_NAV_LAND, ACCEPTED), (ARM, DENIED),
                                   (ARM, ACCEPTED)]
-    assert b.autopilot.mode(0) is Mode.DISARMED
+    assert b.autopilot.mode(0) is SimMode.DISARMED
 
 
 def test_accepted_setpoints_are_echoed_at_once_and_flown() -> None:
@@ -237,7 +240,7 @@ def test_accepted_setpoints_are_echoed_at_once_and_flown() -> None:
     for _ in range(8):  # 4 Hz for 2 s
         b.setpoint((0.8, 0.0), -1.0)
         b.run(0.25)
-    assert b.autopilot.mode(0) is Mode.OFFBOARD
+    assert b.autopilot.mode(0) is SimMode.OFFBOARD
     assert b.autopilot.p_ned[0, 0] - x0 > 0.5  # pulling the payload, so less than a t^2 / 2
     b.received()
     b.setpoint((0.0, 0.0), az=0.0)  # acceleration on all axes (the ArduPilot profile's kind)
@@ -272,7 +275,7 @@ def test_refused_setpoints_are_reported_and_never_flown() -> None:
     assert acks(b.received()) == [(SET_MODE, DENIED)]
     b.run(1.0)
     got = b.received()
-    assert b.autopilot.mode(0) is Mode.HOLD
+    assert b.autopilot.mode(0) is SimMode.HOLD
     assert of_type(got, "SYS_STATUS")[-1].errors_count3 == 6  # every refusal counted
     assert b.endpoint.counters().setpoints_refused == 6
     b.run(0.5)
@@ -455,4 +458,4 @@ def test_command_int_is_answered_unsupported() -> None:
     b.send(b.gcs.mav.command_int_encode(SYSID, 1, mavlink.MAV_FRAME_GLOBAL, TAKEOFF, 0, 0,
                                         0, 0, 0, 0, 0, 0, 10.0))
     assert acks(b.received()) == [(TAKEOFF, mavlink.MAV_RESULT_UNSUPPORTED)]
-    assert b.autopilot.mode(0) is Mode.DISARMED
+    assert b.autopilot.mode(0) is SimMode.DISARMED

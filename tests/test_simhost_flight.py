@@ -18,24 +18,12 @@ from pathlib import Path
 import pytest
 import zenoh
 
-from gcs.config import Team, load_team
-from gcs.link import (
-    GcsLinkConfig,
-    LinkManager,
-    MavlinkEncoder,
-    MavMessage,
-    Presence,
-    PresenceEvent,
-    PresenceSource,
-    SimMode,
-    ZenohSettings,
-    keys,
-    mavlink,
-)
-from gcs.link.clockwire import decode_clock
-from gcs.simprocess import SimProcess, SimStartError, free_tcp_port
-from gcs.simtruth import SimTruth
-from sim.control import ControlAction, ControlCommand
+from gcs.app import SimProcess, SimStartError, free_tcp_port
+from gcs.config import GcsLinkConfig, Team, load_team
+from gcs.link import LinkManager, Presence, PresenceEvent, PresenceSource
+from gcs.transport import ZenohSettings
+from gcs.wire import MavlinkEncoder, MavMessage, SimMode, SimTruth, decode_clock, keys, mavlink
+from sim import ControlAction, ControlCommand
 
 ROOT = Path(__file__).resolve().parent.parent
 CONFIG = ROOT / "configs" / "bebop_square.yaml"

@@ -11,24 +11,19 @@ from pathlib import Path
 
 import pytest
 
-from gcs.config import ConfigError, load_team
-from gcs.link import (
-    CommandError,
-    CommandResult,
-    GcsLinkConfig,
-    Link,
-    LinkManager,
-    ZenohSettings,
-    ZenohTransport,
-    mavlink,
-    write_signing_key,
+from gcs.app import SimProcess, free_tcp_port
+from gcs.config import ConfigError, GcsLinkConfig, load_team
+from gcs.link import CommandError, CommandResult, Link, LinkManager
+from gcs.transport import ZenohSettings, ZenohTransport
+from gcs.wire import mavlink, write_signing_key
+from sim import (
+    DEFAULT_AUTOPILOT_CONFIG,
+    DEFAULT_WORLD_CONFIG,
+    HostOptions,
+    SimHost,
+    load_world_config,
 )
-from gcs.simprocess import SimProcess, free_tcp_port
-from sim.config import load_world_config
-from sim.host import SimHost
-from sim.options import HostOptions
-from sim.scenario import DEFAULT_AUTOPILOT_CONFIG, DEFAULT_WORLD_CONFIG
-from vehicles.config import load_autopilot_config
+from vehicles import load_autopilot_config
 
 ROOT = Path(__file__).resolve().parent.parent
 CONFIG = ROOT / "configs" / "bebop_square.yaml"

@@ -18,8 +18,8 @@ from pathlib import Path
 import pytest
 from pymavlink import mavutil
 
-from gcs.link import SimMode, mavlink
-from gcs.simprocess import SimProcess, SimStartError, free_tcp_port
+from gcs.app import SimProcess, SimStartError, free_tcp_port
+from gcs.wire import SimMode, mavlink
 
 ROOT = Path(__file__).resolve().parent.parent
 CONFIG = ROOT / "configs" / "bebop_square.yaml"
@@ -99,7 +99,7 @@ def test_a_client_on_a_vehicle_port_gets_heartbeats_and_command_acks(
             conn.mav.heartbeat_send(mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0)
             heartbeat = conn.recv_match(type="HEARTBEAT", blocking=True, timeout=0.5)
         assert heartbeat is not None, "no HEARTBEAT from the vehicle's UDP port"
-        assert heartbeat.get_srcSystem() == 2 and heartbeat.custom_mode == SimMode.IDLE
+        assert heartbeat.get_srcSystem() == 2 and heartbeat.custom_mode == SimMode.DISARMED
         conn.mav.command_long_send(2, 1, mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 0,
                                    1, 0, 0, 0, 0, 0, 0)
         ack = conn.recv_match(type="COMMAND_ACK", blocking=True, timeout=3.0)

@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from gcs.simtruth import SimTruth
+from gcs.wire import SimTruth
 
 SAMPLE = SimTruth(t=1.5, ids=(1, 2), vehicle_p_ned=((0.0, 1.0, -2.0), (1.0, 0.0, -2.0)),
                   payload_p_ned=(0.5, 0.5, -1.0), payload_v_ned=(0.1, 0.0, 0.0),

@@ -6,8 +6,7 @@ import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
 
-from gcs.clock import ExternalClock
-from gcs.stepgate import GatedClock, StepGate
+from gcs.loop import ExternalClock, GatedClock, StepGate
 
 
 def test_disabled_gate_gates_nothing() -> None:

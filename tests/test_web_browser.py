@@ -30,13 +30,11 @@ import numpy as np
 import pytest
 import viser
 
-from gcs.link import keys
-from gcs.link.zenoh_session import ZenohSettings, open_session
-from gcs.simprocess import free_tcp_port
-from gcs.simtruth import SimTruth
+from gcs.app import free_tcp_port
+from gcs.transport import ZenohSettings, open_session
+from gcs.wire import SimTruth, keys
 from tests.colours import hue_apart, hue_saturation_value
-from web import palette
-from web.browser_script import ABORT_ANSWERS
+from web import ABORT_ANSWERS, palette
 from web.wireviewer import SceneRecord
 
 CHROMIUM = Path("/usr/bin/chromium")
@@ -318,7 +316,7 @@ def scene_pixels(page, save: Path) -> tuple[int, int]:  # type: ignore[no-untype
     """Pixels of the 3-D view in an ok vehicle's green and in the payload's magenta.
 
     By hue and saturation, whatever the lighting's shade: no other colour of the
-    scene comes near these hues (``web/palette.py``, the rule tested in
+    scene comes near these hues (``web/_palette.py``, the rule tested in
     test_web_frame.py), nor do the page's notifications or the red abort button.
     The screenshot is saved to ``save``.
     """
@@ -340,7 +338,7 @@ def test_page_shows_the_team_and_the_payload(pilot, demo: Demo, screens: Path) -
     wait_for(lambda: text(pilot, "phase") == "ready", 30, "phase ready")
     for vid in (1, 2, 3, 4):
         row = pilot.locator(f"[data-gcs=vehicle-{vid}]").inner_text()
-        assert "IDLE" in row and "ok" in row, row
+        assert "DISARMED" in row and "ok" in row, row
     assert "(simulator)" in text(pilot, "payload")
 
     # what the browser received: NED shown right way up (up is -z), every vehicle and the
@@ -582,7 +580,7 @@ def aborts(page) -> list[float]:  # type: ignore[no-untyped-def]
 
 def abort_answers(page) -> tuple[int, str]:  # type: ignore[no-untyped-def]
     """How many answers the page's overlay ABORT has had, and the latest ("sent",
-    "refused", "offline"; see web.browser_script.ABORT_ANSWERS)."""
+    "refused", "offline"; see web._browser_script.ABORT_ANSWERS)."""
     count, latest = page.locator("[data-gcs=abort]").evaluate(
         "a => [Number(a.dataset.gcsAnswers || 0), a.dataset.gcsAnswer || '']")
     return int(count), str(latest)

@@ -9,17 +9,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gcs.analysis import analyze
 from gcs.config import load_team
-from gcs.fleet import FleetState
-from gcs.simtruth import SimTruth
+from gcs.guidance import analyze
+from gcs.loop import FleetState
+from gcs.wire import SimTruth
 from tests.colours import hue_apart, hue_saturation_value
-from web import palette
-from web.frame import LABEL_LIFT, TeamView, build_frame, rope_pull_estimate, vehicle_states
+from web import Trails, fit_shape, palette, quad_mesh, yaw_wxyz
+from web._frame import LABEL_LIFT, TeamView, build_frame, rope_pull_estimate, vehicle_states
 from web.palette import VehicleState
-from web.quadmesh import quad_mesh, yaw_wxyz
-from web.shapefit import fit_shape
-from web.trails import Trails
 
 ROOT = Path(__file__).resolve().parents[1]
 TEAM = load_team(ROOT / "configs" / "bebop_square.yaml")
@@ -174,7 +171,7 @@ def test_states_from_age_and_mode() -> None:
     states = vehicle_states(fleet, stale_after=0.5)
     assert list(states) == [VehicleState.OK, VehicleState.STALE, VehicleState.HOLDING,
                             VehicleState.STALE]
-    landing = fleet_at(VIEW.desired_xy, modes=("LAND", "AUTO.LAND", "RTL", "IDLE"))
+    landing = fleet_at(VIEW.desired_xy, modes=("LAND", "AUTO.LAND", "RTL", "DISARMED"))
     assert list(vehicle_states(landing, 0.5)) == [VehicleState.LANDING] * 3 + [VehicleState.OK]
 
 

@@ -7,25 +7,23 @@ import re
 
 import pytest
 
-from web.browser_input import (
-    HOLD_ACTIONS,
-    HOTKEYS,
-    INPUT_TIMEOUT,
-    STEP_ACTIONS,
-    InputTracker,
-    parse_input,
-)
-from web.browser_script import (
+from web import (
     ABORT_ANSWERS,
     ABORT_HOTKEY,
     ABORT_MODIFIER,
     CHANNEL_LABEL,
+    HOLD_ACTIONS,
+    HOTKEYS,
+    INPUT_TIMEOUT,
     SEND_PERIOD_MS,
+    STEP_ACTIONS,
+    ControlLock,
+    InputTracker,
     abort_keys,
     pads_html,
+    parse_input,
     script_source,
 )
-from web.control import ControlLock
 
 
 def line(seq: int, keys: str = "", steps: str = "", pad: str = "0.00,0.00",

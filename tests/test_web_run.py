@@ -23,8 +23,8 @@ import viser
 import zstandard
 from websockets.sync.client import connect
 
+from gcs.app import free_tcp_port
 from gcs.cli import build_parser
-from gcs.simprocess import free_tcp_port
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = ROOT / "configs" / "bebop_square.yaml"
@@ -143,11 +143,11 @@ def test_gcs_run_flies_a_gcs_sim_and_stops_on_sigterm(sim_endpoint: str,
         assert listeners(port) == {"0100007F"}  # 127.0.0.1 only, no other interface
         with urllib.request.urlopen(url, timeout=10) as page:
             assert page.status == 200 and b"<html" in page.read().lower()
-        # every vehicle of the sim in the status table: heard (ok), idle on the ground
+        # every vehicle of the sim in the status table: heard (ok), disarmed on the ground
         def all_heard(seen: bytes) -> bool:
             rows = vehicle_rows(seen)
             return sorted(rows) == [1, 2, 3, 4] and all(
-                " ok " in row and "IDLE" in row for row in rows.values())
+                " ok " in row and "DISARMED" in row for row in rows.values())
 
         page_messages(port, until=all_heard, timeout=20.0)
         gcs.proc.send_signal(signal.SIGTERM)

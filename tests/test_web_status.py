@@ -10,20 +10,31 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gcs.analysis import analyze
 from gcs.config import load_team
-from gcs.fleet import FleetState
-from gcs.guidance import MotionDemand
-from gcs.link.health import LinkHealth
-from gcs.operator import OperatorSnapshot
-from gcs.phases import Phase
-from gcs.runtime import Event, RuntimeSnapshot, TickStats
-from gcs.safety import SafetyEvent, SafetyReason, SafetyVerdict
-from gcs.simtruth import SimTruth
-from web import palette
-from web.frame import TeamView
-from web.history import History
-from web.status import UiStats, events_html, rope_pull_estimate, summary_html, vehicles_html
+from gcs.guidance import MotionDemand, analyze
+from gcs.link import LinkHealth
+from gcs.loop import (
+    Event,
+    FleetState,
+    OperatorSnapshot,
+    Phase,
+    RuntimeSnapshot,
+    SafetyEvent,
+    SafetyReason,
+    SafetyVerdict,
+    TickStats,
+)
+from gcs.wire import SimTruth
+from web import (
+    History,
+    TeamView,
+    UiStats,
+    events_html,
+    palette,
+    rope_pull_estimate,
+    summary_html,
+    vehicles_html,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 TEAM = load_team(ROOT / "configs" / "bebop_square.yaml")
@@ -42,7 +53,7 @@ def snapshot(t: float = 5.0, *, xy: np.ndarray | None = None, v: np.ndarray | No
                        tilt=np.array([0.0, 0.1, 0.2, np.nan]), age=np.full(n, 0.05),
                        heartbeat_age=np.full(n, 0.4), armed=np.array([1, 1, 1, 0], bool),
                        battery=np.array([90.0, 80.0, 70.0, np.nan]),
-                       modes=("OFFBOARD", "OFFBOARD", "HOLD", "IDLE"))
+                       modes=("OFFBOARD", "OFFBOARD", "HOLD", "DISARMED"))
     demand = MotionDemand(forward=0.5, right=-0.25, rotate=0.0, scale=scale)
     op = OperatorSnapshot(demand=demand, altitude=1.5, altitude_target=1.8,
                           scale_target=scale, guidance_on=True, source=source)

@@ -15,23 +15,26 @@ import numpy as np
 import pytest
 import viser
 
-from gcs.analysis import analyze
-from gcs.app import GcsApp
+from gcs.app import GcsApp, SimProcess, free_tcp_port
 from gcs.config import load_team
-from gcs.fleet import FleetState
-from gcs.link.zenoh_session import ZenohSettings
-from gcs.operator import OperatorCommand
-from gcs.simprocess import SimProcess, free_tcp_port
-from gcs.simtruth import SimTruth
-from web import palette
-from web.actions import OperatorActions
-from web.control import ControlLock
-from web.frame import SceneFrame, TeamView, build_frame
-from web.panel import FOLLOW_STEP, ControlPanel
-from web.quadmesh import quad_mesh
-from web.scene import SceneView
-from web.trails import Trails
-from web.ui import WebUi
+from gcs.guidance import analyze
+from gcs.loop import FleetState, OperatorCommand
+from gcs.transport import ZenohSettings
+from gcs.wire import SimTruth
+from web import (
+    FOLLOW_STEP,
+    ControlLock,
+    ControlPanel,
+    OperatorActions,
+    SceneFrame,
+    SceneView,
+    TeamView,
+    Trails,
+    WebUi,
+    build_frame,
+    palette,
+    quad_mesh,
+)
 from web.wireviewer import WireViewer
 
 ROOT = Path(__file__).resolve().parents[1]

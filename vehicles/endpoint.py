@@ -3,20 +3,20 @@
 Why: the GCS sees a simulated vehicle only through MAVLink, exactly as it
 would see PX4 or ArduPilot, so every behaviour the GCS relies on (the
 contract in ``gcs/link/README.md``) lives here, between the bytes and the
-:class:`~vehicles.autopilot.Autopilot`:
+:class:`~vehicles._autopilot.Autopilot`:
 
 - a MAVLink 2 system with its own system id, component 1; frames addressed
   to another system or component are counted and ignored, bad bytes are
   counted and dropped (the decoder never raises);
 - HEARTBEAT (1 Hz, and at once after every mode change), telemetry at rates
-  set by ``SET_MESSAGE_INTERVAL`` (:mod:`vehicles.streams`), times from sim time;
-- COMMAND_LONG answered by COMMAND_ACK (:mod:`vehicles.commands`), refusals
+  set by ``SET_MESSAGE_INTERVAL`` (:mod:`vehicles._streams`), times from sim time;
+- COMMAND_LONG answered by COMMAND_ACK (:mod:`vehicles._commands`), refusals
   explained by STATUSTEXT; a retry (``confirmation`` > 0) of the command just
   carried out gets the same answer without being carried out again (a resent
   NAV_TAKEOFF whose ack was lost must not climb again from where the first
   one got to), unless the first was TEMPORARILY_REJECTED; COMMAND_INT is
   answered UNSUPPORTED, as a GCS expects an answer;
-- acceleration setpoints checked (:mod:`vehicles.setpoint_check`), each
+- acceleration setpoints checked (:mod:`vehicles._setpoint_check`), each
   accepted one echoed at once as POSITION_TARGET_LOCAL_NED (PX4's target
   report), each refused one reported by STATUSTEXT and never flown;
 - TIMESYNC probes answered with the vehicle's clock;
@@ -44,19 +44,23 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TypeAlias
 
-from gcs.link.decoder import DecodeStats, FrameDecoder
-from gcs.link.dialect import MavMessage
-from gcs.link.encoder import MavlinkEncoder
-from gcs.link.setpoints import AccelSetpoint, SetpointKind
-from gcs.link.signing import SigningKey
-from gcs.link.telemetry import Severity
-from vehicles.autopilot import Autopilot
-from vehicles.battery import Battery
-from vehicles.commands import CommandOutcome, MavResult, execute_command
-from vehicles.reports import CommCounters, VehicleView, build_report, time_boot_ms
-from vehicles.setpoint_check import Refusal, SetpointLimits, check_setpoint
-from vehicles.state import Measurements
-from vehicles.streams import DEFAULT_RATES_HZ, StreamSchedule, TelemetryMessage
+from gcs.wire import (
+    AccelSetpoint,
+    DecodeStats,
+    FrameDecoder,
+    MavlinkEncoder,
+    MavMessage,
+    SetpointKind,
+    Severity,
+    SigningKey,
+)
+from vehicles._autopilot import Autopilot
+from vehicles._battery import Battery
+from vehicles._commands import CommandOutcome, MavResult, execute_command
+from vehicles._reports import CommCounters, VehicleView, build_report, time_boot_ms
+from vehicles._setpoint_check import Refusal, SetpointLimits, check_setpoint
+from vehicles._state import Measurements
+from vehicles._streams import DEFAULT_RATES_HZ, StreamSchedule, TelemetryMessage
 
 __all__ = ["COMPONENT_ID", "EndpointCounters", "Inbound", "VehicleEndpoint"]
 
@@ -124,7 +128,7 @@ class VehicleEndpoint:
         self._streams = StreamSchedule(rates_hz)
         self._limits = limits if limits is not None else SetpointLimits()
         self._reported_mode: int | None = None
-        """Autopilot mode (a :class:`~vehicles.modes.Mode` value) the last HEARTBEAT showed."""
+        """Autopilot mode (a :class:`~gcs.wire.SimMode` value) the last HEARTBEAT showed."""
         self._last_update: float | None = None
         self._refusal_reported: dict[Refusal, float] = {}
         self._statustext_id = 0

@@ -35,6 +35,8 @@ from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 from websockets.typing import Subprotocol
 
+from gcs.common import join_thread
+
 __all__ = ["SceneRecord", "WireViewer", "decode_window", "main", "scene_names"]
 
 _HEADER = 16
@@ -217,7 +219,7 @@ class WireViewer(SceneRecord):
     def close(self) -> None:
         self._stop.set()
         self._ws.close()
-        self._thread.join(timeout=2.0)
+        join_thread(self._thread, 2.0, what="the wire viewer's reader")
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -8,145 +8,66 @@ link health, and sends setpoints and acknowledged commands. An
 autopilot's command sequences. :class:`LinkManager` opens all links from
 configuration and reports vehicles that appear, vanish or are missing.
 
-The codec pieces (:class:`MavlinkEncoder`, :class:`FrameDecoder`, signing,
-:mod:`gcs.link.keys`, :class:`SimMode`, :func:`read_setpoint`,
-:class:`ZenohTransport`) are shared with the simulated vehicles' endpoint.
+The layer is the GCS's alone: the wire formats it speaks (``gcs.wire``) and the
+carriers it speaks over (``gcs.transport``) are what the simulated vehicles share.
+
+Modules:
+
+    ``_discovery``          Which vehicles are present: appear/vanish events and the
+                            configured ones that are missing.
+    ``_errors``             Command outcomes and the errors a link raises, each naming the
+                            vehicle.
+    ``_fanout``             One frame to each of many links at once: the loop's setpoints
+                            for a whole fleet.
+    ``_health``             Link health of one vehicle: is it alive, what is lost, what is
+                            refused, how slow.
+    ``_link``               The GCS's link to one vehicle: MAVLink in and out, latest
+                            telemetry, health, commands.
+    ``_manager``            All of the GCS's links, opened from configuration and closed
+                            together.
+    ``_profile``            Autopilot profiles: how each kind of vehicle is armed, launched,
+                            switched and landed.
+    ``_profile_ardupilot``  Profile of ArduCopter in GUIDED mode, with the GCS-side vertical
+                            loop.
+    ``_profile_px4``        Profile of PX4 in OFFBOARD mode.
+    ``_profile_sim``        Profile of the simulated vehicles (this repository's onboard
+                            autopilot).
+    ``_profiles``           Choosing an autopilot profile by its configured name.
 """
 
-from gcs.link import keys
-from gcs.link.config import ZENOH, GcsLinkConfig, LinkConfig, check_links, links_from_list
-from gcs.link.decoder import DecodeStats, FrameDecoder
-from gcs.link.dialect import MavMessage, command_name, mavlink, message_id, message_name
-from gcs.link.discovery import Discovery, Presence, PresenceEvent, PresenceSource
-from gcs.link.encoder import DEFAULT_GCS_COMPONENT_ID, DEFAULT_GCS_SYSTEM_ID, MavlinkEncoder
-from gcs.link.errors import CommandAck, CommandError, CommandResult, LinkError
-from gcs.link.fanout import Fanout
-from gcs.link.health import LinkHealth
-from gcs.link.link import DEFAULT_TELEMETRY_RATES_HZ, Link
-from gcs.link.manager import LinkManager
-from gcs.link.mavutil_transport import MavutilTransport
-from gcs.link.modes import (
-    CUSTOM_MODE_ENABLED,
-    SAFETY_ARMED,
-    CopterMode,
-    Px4AutoSubMode,
-    Px4MainMode,
-    SimMode,
-    px4_custom_mode,
-    px4_mode_text,
-)
-from gcs.link.profile import AutopilotProfile, ProfileName
-from gcs.link.profile_ardupilot import ArduPilotProfile, VerticalPd
-from gcs.link.profile_px4 import Px4Profile
-from gcs.link.profile_sim import SimProfile
-from gcs.link.profiles import make_profile
-from gcs.link.setpoints import (
-    MASK_ACCEL,
-    MASK_ACCEL_XY_POS_Z,
-    SETPOINT_MESSAGE,
-    AccelSetpoint,
-    SetpointKind,
-    SetpointPacker,
-    accel_setpoint_fields,
-    accel_setpoint_message,
-    read_setpoint,
-)
-from gcs.link.signing import (
-    SignatureCheck,
-    SigningKey,
-    load_signing_key,
-    parse_signing_key,
-    write_signing_key,
-)
-from gcs.link.telemetry import (
-    Attitude,
-    Heartbeat,
-    Imu,
-    LocalPosition,
-    Severity,
-    StatusText,
-    SystemStatus,
-    Telemetry,
-)
-from gcs.link.transport import FrameDirection, Transport
-from gcs.link.zenoh_session import DEFAULT_ENDPOINT, ZenohSettings, open_session, zenoh_config
-from gcs.link.zenoh_transport import ZenohTransport, declare_alive, watch_alive
+from gcs.link._discovery import Discovery, Presence, PresenceEvent, PresenceSource
+from gcs.link._errors import CommandAck, CommandError, CommandResult, LinkError
+from gcs.link._fanout import Fanout
+from gcs.link._health import LinkHealth, SequenceTracker
+from gcs.link._link import DEFAULT_TELEMETRY_RATES_HZ, Link
+from gcs.link._manager import LinkManager
+from gcs.link._profile import AutopilotProfile, ProfileBase, ProfileName
+from gcs.link._profile_ardupilot import ArduPilotProfile, VerticalPd
+from gcs.link._profile_px4 import Px4Profile
+from gcs.link._profile_sim import SimProfile
+from gcs.link._profiles import make_profile
 
 __all__ = [
-    "CUSTOM_MODE_ENABLED",
-    "DEFAULT_ENDPOINT",
-    "DEFAULT_GCS_COMPONENT_ID",
-    "DEFAULT_GCS_SYSTEM_ID",
     "DEFAULT_TELEMETRY_RATES_HZ",
-    "MASK_ACCEL",
-    "MASK_ACCEL_XY_POS_Z",
-    "SAFETY_ARMED",
-    "SETPOINT_MESSAGE",
-    "ZENOH",
-    "AccelSetpoint",
     "ArduPilotProfile",
-    "Attitude",
     "AutopilotProfile",
     "CommandAck",
     "CommandError",
     "CommandResult",
-    "CopterMode",
-    "DecodeStats",
     "Discovery",
     "Fanout",
-    "FrameDecoder",
-    "FrameDirection",
-    "GcsLinkConfig",
-    "Heartbeat",
-    "Imu",
     "Link",
-    "LinkConfig",
     "LinkError",
     "LinkHealth",
     "LinkManager",
-    "LocalPosition",
-    "MavMessage",
-    "MavlinkEncoder",
-    "MavutilTransport",
     "Presence",
     "PresenceEvent",
     "PresenceSource",
+    "ProfileBase",
     "ProfileName",
-    "Px4AutoSubMode",
-    "Px4MainMode",
     "Px4Profile",
-    "SetpointKind",
-    "SetpointPacker",
-    "Severity",
-    "SignatureCheck",
-    "SigningKey",
-    "SimMode",
+    "SequenceTracker",
     "SimProfile",
-    "StatusText",
-    "SystemStatus",
-    "Telemetry",
-    "Transport",
     "VerticalPd",
-    "ZenohSettings",
-    "ZenohTransport",
-    "accel_setpoint_fields",
-    "accel_setpoint_message",
-    "check_links",
-    "command_name",
-    "declare_alive",
-    "keys",
-    "links_from_list",
-    "load_signing_key",
     "make_profile",
-    "mavlink",
-    "message_id",
-    "message_name",
-    "open_session",
-    "parse_signing_key",
-    "px4_custom_mode",
-    "px4_mode_text",
-    "read_setpoint",
-    "watch_alive",
-    "write_signing_key",
-    "zenoh_config",
 ]

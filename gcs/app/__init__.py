@@ -1,0 +1,38 @@
+"""The GCS process assembled, the simulated team as a child, headless flights.
+
+:class:`GcsApp` is what ``gcs run`` and ``gcs demo`` start (links, clock,
+operator, recorder and the loop); :class:`SimProcess` starts ``python -m sim``;
+:func:`fly` plays a :class:`Scenario` in lockstep with the simulator.
+
+Modules:
+
+    ``_app``         The GCS process, assembled: links, clock, operator, recorder and the 4
+                     Hz loop.
+    ``_fly``         ``gcs fly``: a headless flight of a scenario with simulated vehicles,
+                     and its metrics.
+    ``_scenario``    Scripted operator inputs: a scenario is a list of steps played through
+                     the same operator-command object and phase actions as the browser and
+                     the gamepad.
+    ``_simprocess``  Start the simulated team (``python -m sim``) as a child process and
+                     wait until it is up.
+"""
+
+from gcs.app._app import GcsApp
+from gcs.app._fly import FlightResult, fly
+from gcs.app._scenario import Scenario, ScenarioError, Step, Sticks, load_scenario, play
+from gcs.app._simprocess import SimProcess, SimStartError, free_tcp_port
+
+__all__ = [
+    "FlightResult",
+    "GcsApp",
+    "Scenario",
+    "ScenarioError",
+    "SimProcess",
+    "SimStartError",
+    "Step",
+    "Sticks",
+    "fly",
+    "free_tcp_port",
+    "load_scenario",
+    "play",
+]

@@ -1,0 +1,42 @@
+"""Foundations every other package may use; it imports nothing of the project.
+
+Configs are typed, frozen dataclasses validated from YAML (:func:`from_mapping`), the
+shipped config files are found in a checkout or an install (:func:`shipped_config`),
+and compiled kernels are built with :func:`kernel`, whose disk cache is checked
+against their sources the first time one is built.
+
+Modules:
+
+    ``_jit_cache``     Compiled kernels whose numba disk cache stays honest across files.
+    ``_shipped``       Where the configs shipped with the project are, in a checkout and
+                       once installed.
+    ``_threads``       Stopping a thread and saying so when it will not stop.
+    ``_typed_config``  Typed, validated configuration objects built from YAML.
+"""
+
+from gcs.common._jit_cache import kernel, kernel_sources, refresh_numba_cache
+from gcs.common._shipped import (
+    LOCAL_CONFIGS,
+    default_config,
+    missing_config_hint,
+    shipped_config,
+    shipped_configs,
+)
+from gcs.common._threads import join_thread
+from gcs.common._typed_config import ConfigError, field, from_mapping, load_yaml
+
+__all__ = [
+    "LOCAL_CONFIGS",
+    "ConfigError",
+    "default_config",
+    "field",
+    "from_mapping",
+    "join_thread",
+    "kernel",
+    "kernel_sources",
+    "load_yaml",
+    "missing_config_hint",
+    "refresh_numba_cache",
+    "shipped_config",
+    "shipped_configs",
+]

@@ -1,0 +1,312 @@
+"""Team configuration: the shape, gains, limits, payload and airframe of one team.
+
+A team file (``configs/*.yaml``) is loaded into a frozen :class:`TeamConfig`
+and its shape into a :class:`~gcs.formation._graph.Formation`; every mistake is refused
+with one line naming the file, the field and what is wrong.
+
+Vehicle positions are in the team's body frame: x forward, y right (NED-like),
+metres. Edges are ``[tail, head]`` or ``[tail, head, distance]`` by vehicle id,
+or mappings ``{tail: 1, head: 2, distance: 1.0}``.
+
+Required fields have no default: the physical and gain figures of a team (its
+airframe file, every field of ``guidance`` but the setpoint rate, the scale
+range and the hold compensation, every field of ``limits`` and ``payload``, and
+``analysis.max_distance_error`` and ``analysis.design_rope_angle_deg``), so a
+file that forgets one is refused instead of flying the paper's numbers. The
+defaults left are engineering choices that are not figures of the paper:
+setpoint re-send rate, scale range, operator shaping, safety thresholds,
+flight-phase heights and timings, standard gravity, links.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from gcs.common import ConfigError, field, from_mapping, load_yaml
+from gcs.config._links import GcsLinkConfig, LinkConfig, check_links
+from gcs.formation import Formation, FormationError, build_formation
+from vehicles import Airframe, load_airframe
+
+__all__ = [
+    "AnalysisConfig",
+    "ConfigError",
+    "EdgeSpec",
+    "FlightConfig",
+    "GuidanceConfig",
+    "LimitsConfig",
+    "OperatorConfig",
+    "PayloadConfig",
+    "SafetyConfig",
+    "Team",
+    "TeamConfig",
+    "VehicleSpec",
+    "load_team",
+]
+
+STANDARD_GRAVITY = 9.80665  # m/s^2
+
+
+@dataclass(frozen=True)
+class VehicleSpec:
+    """One member of the team."""
+
+    id: int = field(doc="MAVLink system id of the vehicle", ge=1, le=254)
+    position: tuple[float, float] | None = field(
+        doc="desired position in the team body frame (x forward, y right), m", default=None)
+
+
+@dataclass(frozen=True)
+class EdgeSpec:
+    """One controlled distance between two vehicles (by id)."""
+
+    tail: int = field(doc="vehicle id at the tail (z_k = p_tail - p_head)")
+    head: int = field(doc="vehicle id at the head")
+    distance: float | None = field(doc="desired distance, m (derived from positions if absent)",
+                                   default=None, gt=0.0)
+
+
+@dataclass(frozen=True)
+class GuidanceConfig:
+    """Gains and operator ranges of the formation-motion guidance (eq. udi)."""
+
+    c1: float = field(doc="velocity gain c1, 1/s", gt=0.0)
+    c2: float = field(doc="distance gain c2, 1/s^2", gt=0.0)
+    rate_hz: float = field(doc="guidance rate, Hz", gt=0.0, le=100.0)
+    max_speed: float = field(doc="translation speed at full stick, m/s", gt=0.0)
+    max_rotation_disagreement: float = field(
+        doc="largest rotation disagreement mu_r at full stick, m/s", ge=0.0)
+    setpoint_rate_hz: float = field(
+        doc="setpoints per second to each vehicle: the latest guidance output is re-sent "
+            "between ticks, so one late tick does not trip the autopilot's setpoint timeout "
+            "(0.5 s in the sim, COM_OF_LOSS_T on PX4); a whole multiple of rate_hz",
+        default=12.0, gt=0.0, le=100.0)
+    scale_min: float = field(doc="smallest shape scale", default=0.3, gt=0.0)
+    scale_max: float = field(doc="largest shape scale", default=2.0, gt=0.0)
+    scale_step: float = field(doc="scale change per operator step", default=0.05, gt=0.0)
+    hold_compensation: bool = field(
+        doc="predict relative positions half a period ahead (see gcs.guidance)", default=True)
+
+    @property
+    def setpoints_per_tick(self) -> int:
+        """Setpoints each vehicle gets per guidance tick (the tick's own included)."""
+        return round(self.setpoint_rate_hz / self.rate_hz)
+
+    def __post_init__(self) -> None:
+        ratio = self.setpoint_rate_hz / self.rate_hz
+        if ratio < 1.0 - 1e-9 or abs(ratio - round(ratio)) > 1e-6:
+            raise ValueError(f"guidance.setpoint_rate_hz ({self.setpoint_rate_hz:g} Hz) must be a "
+                             f"whole multiple of guidance.rate_hz ({self.rate_hz:g} Hz)")
+        if self.scale_min > 1.0 or self.scale_max < 1.0:
+            raise ValueError(f"guidance.scale_min/scale_max must bracket 1, got "
+                             f"[{self.scale_min:g}, {self.scale_max:g}]")
+
+
+@dataclass(frozen=True)
+class LimitsConfig:
+    """Physical and safety limits enforced on the vehicles and the guidance."""
+
+    bank_deg: float = field(doc="largest roll/pitch angle, degrees", gt=0.0, lt=90.0)
+    accel_norm: float = field(doc="saturation of the horizontal acceleration norm, m/s^2",
+                              gt=0.0)
+    accel_axis: float = field(doc="saturation of each horizontal acceleration axis, m/s^2",
+                              gt=0.0)
+
+    @property
+    def bank(self) -> float:
+        """Bank limit, rad."""
+        return math.radians(self.bank_deg)
+
+
+@dataclass(frozen=True)
+class PayloadConfig:
+    """The suspended payload and its ropes."""
+
+    mass: float = field(doc="payload mass M, kg", gt=0.0)
+    rope_length: float = field(doc="rope length l (same for every vehicle), m", gt=0.0)
+
+
+@dataclass(frozen=True)
+class AnalysisConfig:
+    """Assumptions of the worst-case analysis (paper, section 'Force and worst case')."""
+
+    max_distance_error: float = field(doc="worst distance error assumed in eq. max, m",
+                                      gt=0.0)
+    design_rope_angle_deg: float = field(
+        doc="largest rope angle from the vertical the design must withstand, degrees",
+        gt=0.0, lt=90.0)
+    max_speed_error: float | None = field(
+        doc="worst speed error ||e_v|| in eq. max, m/s (default: guidance.max_speed)",
+        default=None, gt=0.0)
+    payload_share: int | None = field(
+        doc="a vehicle may carry 1/share of the payload weight (default: vehicles - 1)",
+        default=None, ge=1)
+    gravity: float = field(doc="gravitational acceleration, m/s^2", default=STANDARD_GRAVITY,
+                           gt=0.0)
+
+
+@dataclass(frozen=True)
+class OperatorConfig:
+    """How operator inputs (browser, gamepad, script) are shaped."""
+
+    deadzone: float = field(doc="stick deadzone, fraction of full travel", default=0.05,
+                            ge=0.0, lt=1.0)
+    expo: float = field(doc="stick expo (0 linear, 1 cubic)", default=0.3, ge=0.0, le=1.0)
+    stick_timeout: float = field(doc="sticks fall back to zero this long after the last "
+                                 "input from a source, s", default=1.0, gt=0.0)
+    altitude_rate: float = field(doc="largest rate of the altitude target, m/s", default=0.3,
+                                 gt=0.0)
+    altitude_min: float = field(doc="lowest altitude target above the ground, m", default=0.0,
+                                ge=0.0)
+    altitude_max: float = field(doc="highest altitude target above the ground, m", default=4.0,
+                                gt=0.0)
+    altitude_step: float = field(doc="altitude change per operator step, m", default=0.1,
+                                 gt=0.0)
+    scale_rate: float = field(doc="largest rate of change of the shape's scale, 1/s",
+                              default=0.05, gt=0.0)
+
+
+@dataclass(frozen=True)
+class SafetyConfig:
+    """Safety rules of the GCS loop (each enforced in gcs/loop/_safety.py)."""
+
+    stale_after: float = field(doc="telemetry older than this freezes the motion, s",
+                               default=0.5, gt=0.0)
+    land_after: float = field(doc="a vehicle silent this long lands the team, s", default=3.0,
+                              gt=0.0)
+    geofence_xy: float = field(doc="half-size of the horizontal geofence box around the "
+                               "origin, m", default=4.0, gt=0.0)
+    geofence_altitude: float = field(doc="highest altitude above the ground, m", default=4.0,
+                                     gt=0.0)
+
+    def __post_init__(self) -> None:
+        if self.land_after < self.stale_after:
+            raise ValueError(f"safety.land_after ({self.land_after:g} s) must not be shorter "
+                             f"than safety.stale_after ({self.stale_after:g} s)")
+
+
+@dataclass(frozen=True)
+class FlightConfig:
+    """Heights and timings of the flight phases (gcs/loop/_phases.py)."""
+
+    takeoff_slack: float = field(doc="take off to this far below the altitude where the ropes "
+                                 "become taut, m", default=0.15, ge=0.0)
+    lift_height: float = field(doc="climb above the taut-rope altitude to lift the payload, m",
+                               default=1.0, gt=0.0)
+    lift_rate: float = field(doc="climb and descent rate while lifting and setting down the "
+                             "payload, m/s: slow, so the ropes take the load gently",
+                             default=0.1, gt=0.0)
+    altitude_tolerance: float = field(doc="an altitude counts as reached within this, m",
+                                      default=0.1, gt=0.0)
+    takeoff_timeout: float = field(doc="longest take-off before it is declared failed, s",
+                                   default=30.0, gt=0.0)
+    abort_hold: float = field(doc="after an abort, hold this long before landing, s",
+                              default=1.0, ge=0.0)
+
+
+@dataclass(frozen=True)
+class TeamConfig:
+    """Everything that defines one team; see configs/bebop_square.yaml."""
+
+    name: str = field(doc="team name (also the zenoh fleet name)")
+    airframe: Airframe = field(doc="airframe of every vehicle: a file path or a mapping")
+    vehicles: tuple[VehicleSpec, ...] = field(doc="team members", min_len=2)
+    edges: tuple[EdgeSpec, ...] = field(doc="controlled distances", min_len=1)
+    guidance: GuidanceConfig = field(doc="guidance gains and ranges")
+    limits: LimitsConfig = field(doc="limits")
+    payload: PayloadConfig = field(doc="payload and ropes")
+    analysis: AnalysisConfig = field(doc="worst-case analysis assumptions")
+    operator: OperatorConfig = field(doc="operator input shaping",
+                                     default_factory=OperatorConfig)
+    safety: SafetyConfig = field(doc="safety rules", default_factory=SafetyConfig)
+    flight: FlightConfig = field(doc="flight phases", default_factory=FlightConfig)
+    gcs: GcsLinkConfig = field(doc="the GCS's identity and zenoh settings",
+                               default_factory=GcsLinkConfig)
+    links: tuple[LinkConfig, ...] | None = field(
+        doc="how to reach each vehicle (default: every vehicle simulated, over zenoh)",
+        default=None)
+
+    def vehicle_links(self) -> tuple[LinkConfig, ...]:
+        """The configured links, or a simulated zenoh link per vehicle."""
+        if self.links is not None:
+            return self.links
+        return tuple(LinkConfig(sysid=v.id) for v in self.vehicles)
+
+
+@dataclass(frozen=True, eq=False)
+class Team:
+    """A loaded team: its validated config, its formation and where it came from."""
+
+    config: TeamConfig
+    formation: Formation
+    source: str
+
+
+def _normalise(raw: Any, path: Path) -> Any:
+    """Accept the short forms of the file (edge lists, airframe by path)."""
+    if not isinstance(raw, dict):
+        return raw
+    raw = dict(raw)
+    edges = raw.get("edges")
+    if isinstance(edges, list):
+        out = []
+        for k, e in enumerate(edges):
+            if isinstance(e, list):
+                if len(e) not in (2, 3):
+                    raise ConfigError(str(path), f"edges[{k}]",
+                                      f"expected [tail, head] or [tail, head, distance], "
+                                      f"got {len(e)} values")
+                e = dict(zip(("tail", "head", "distance"), e, strict=False))
+            out.append(e)
+        raw["edges"] = out
+    frame = raw.get("airframe")
+    if isinstance(frame, str):
+        frame_path = (path.parent / frame).resolve()
+        if not frame_path.is_file():
+            raise ConfigError(str(path), "airframe", f"file not found: {frame}")
+        raw["airframe"] = load_airframe(frame_path)
+    return raw
+
+
+def load_team(path: str | Path) -> Team:
+    """Load and validate a team file; raises ConfigError (one line) on any mistake."""
+    path = Path(path)
+    cfg = from_mapping(TeamConfig, _normalise(load_yaml(path), path), str(path))
+    ids = [v.id for v in cfg.vehicles]
+    have_pos = [v.position is not None for v in cfg.vehicles]
+    if any(have_pos) and not all(have_pos):
+        k = have_pos.index(False)
+        raise ConfigError(str(path), f"vehicles[{k}].position",
+                          "missing: give every vehicle a position, or none")
+    positions = np.array([v.position for v in cfg.vehicles]) if all(have_pos) else None
+    try:
+        formation = build_formation(ids, [(e.tail, e.head) for e in cfg.edges],
+                                    positions=positions,
+                                    distances=[e.distance for e in cfg.edges])
+    except FormationError as exc:
+        raise ConfigError(str(path), exc.where, exc.what) from None
+    if cfg.links is not None:
+        check_links(cfg.links, gcs_system_id=cfg.gcs.system_id, source=str(path))
+        linked = {link.sysid for link in cfg.links}
+        for k, vid in enumerate(ids):
+            if vid not in linked:
+                raise ConfigError(str(path), f"vehicles[{k}].id",
+                                  f"vehicle {vid} has no entry under links")
+        for k, link in enumerate(cfg.links):
+            if link.sysid not in ids:
+                raise ConfigError(str(path), f"links[{k}].sysid",
+                                  f"system id {link.sysid} is not a vehicle of the team")
+    elif cfg.gcs.system_id in ids:
+        k = ids.index(cfg.gcs.system_id)
+        raise ConfigError(str(path), f"vehicles[{k}].id",
+                          f"{cfg.gcs.system_id} is the GCS's own system id (gcs.system_id)")
+    if cfg.limits.accel_axis > cfg.limits.accel_norm:
+        raise ConfigError(str(path), "limits.accel_axis",
+                          f"{cfg.limits.accel_axis:g} m/s^2 exceeds limits.accel_norm "
+                          f"{cfg.limits.accel_norm:g} m/s^2")
+    return Team(config=cfg, formation=formation, source=str(path))
+

@@ -1,0 +1,78 @@
+"""The GCS's 4 Hz loop: fleet table, safety rules, operator, phases, runtime.
+
+:class:`Runtime` ticks on a :class:`Clock` (wall or simulator time): the fleet's
+latest telemetry, the safety rules, the operator's command, the guidance, one
+setpoint per vehicle, the phase actions; it records through a
+:class:`FlightRecorder`.
+
+Modules:
+
+    ``_clock``     Clocks: where every loop takes its time from.
+    ``_fleet``     The team's latest state as arrays, read from the links once per tick.
+    ``_gamepad``   A gamepad on the GCS side: sticks, altitude, scale, guidance switch,
+                   abort and resume.
+    ``_operator``  The operator's command: one object written by any source, read by the 4
+                   Hz loop.
+    ``_phases``    Flight phases of a transport and which operator action leads where.
+    ``_runtime``   The GCS loop: operator sticks in, one acceleration setpoint per vehicle
+                   out, at 4 Hz.
+    ``_safety``    Safety rules of the GCS loop, each enforced here and nowhere else.
+    ``_stepgate``  In lockstep with the simulator, helper threads act only at ticks.
+"""
+
+from gcs.loop._clock import Clock, ClockStoppedError, ExternalClock, WallClock
+from gcs.loop._fleet import FleetState, FleetTable
+from gcs.loop._gamepad import (
+    AXES_RETRY_S,
+    MAX_FAULTS_REPORTED,
+    AxisMap,
+    Gamepad,
+    GamepadAxes,
+    GamepadButtons,
+    GamepadConfig,
+    GamepadMapper,
+    load_gamepad_config,
+)
+from gcs.loop._operator import OperatorCommand, OperatorSnapshot, shape_stick
+from gcs.loop._phases import Action, Phase, PhaseError, next_phase
+from gcs.loop._runtime import Event, FlightRecorder, Runtime, RuntimeSnapshot, TickStats
+from gcs.loop._safety import SafetyEvent, SafetyReason, SafetyVerdict, evaluate, rule_flags
+from gcs.loop._stepgate import HOLD_CAP_S, GatedClock, StepGate
+
+__all__ = [
+    "AXES_RETRY_S",
+    "HOLD_CAP_S",
+    "MAX_FAULTS_REPORTED",
+    "Action",
+    "AxisMap",
+    "Clock",
+    "ClockStoppedError",
+    "Event",
+    "ExternalClock",
+    "FleetState",
+    "FleetTable",
+    "FlightRecorder",
+    "Gamepad",
+    "GamepadAxes",
+    "GamepadButtons",
+    "GamepadConfig",
+    "GamepadMapper",
+    "GatedClock",
+    "OperatorCommand",
+    "OperatorSnapshot",
+    "Phase",
+    "PhaseError",
+    "Runtime",
+    "RuntimeSnapshot",
+    "SafetyEvent",
+    "SafetyReason",
+    "SafetyVerdict",
+    "StepGate",
+    "TickStats",
+    "WallClock",
+    "evaluate",
+    "load_gamepad_config",
+    "next_phase",
+    "rule_flags",
+    "shape_stick",
+]

@@ -1,0 +1,670 @@
+"""The GCS loop: operator sticks in, one acceleration setpoint per vehicle out, at 4 Hz.
+
+Each tick (scheduled on a :class:`~gcs.loop._clock.Clock`, wall or simulator time):
+
+1. read the fleet's latest telemetry (:class:`gcs.loop._fleet.FleetTable`);
+2. apply the safety rules (:func:`gcs.loop._safety.evaluate`): freeze the motion or
+   land the team;
+3. take the operator's command, run the guidance (relative positions, own
+   velocities), saturate, and send each vehicle its setpoint through its
+   autopilot profile; an error about one vehicle is reported and the loop
+   goes on;
+4. advance the flight phase and record the guidance internals.
+
+Between ticks the latest setpoints are re-sent (``guidance.setpoint_rate_hz``,
+12 Hz by default): the guidance stays at the paper's 4 Hz, but one tick that
+comes late on a busy machine no longer leaves a vehicle half a second without
+a setpoint, which sends it into hold. In lockstep with the simulator (``gcs
+fly``) the sim cannot outrun the loop, and re-sends would arrive at sim times
+that vary from run to run, so there each tick sends once.
+
+Phase actions that wait for acknowledgements (arm, take off, land) run on a
+worker thread, so the loop never waits on a vehicle. The latest
+:class:`RuntimeSnapshot` is what the UI and the flight metrics read.
+"""
+
+from __future__ import annotations
+
+import collections
+import functools
+import math
+import threading
+import time
+from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+
+from gcs.config import Team
+from gcs.guidance import Analysis, Guidance, MotionDemand, a_safe_span, analyze, finite_max_norm
+from gcs.link import AutopilotProfile, Fanout, LinkError
+from gcs.loop._clock import Clock, ClockStoppedError
+from gcs.loop._fleet import FleetState, FleetTable
+from gcs.loop._operator import OperatorCommand, OperatorSnapshot
+from gcs.loop._phases import Action, Phase, PhaseError, next_phase
+from gcs.loop._safety import SafetyVerdict, evaluate
+from gcs.loop._stepgate import HOLD_CAP_S, StepGate
+from gcs.wire import SETPOINT_MESSAGE, SetpointPacker, SimTruth
+
+__all__ = ["Event", "FlightRecorder", "Runtime", "RuntimeSnapshot", "TickStats"]
+
+
+class FlightRecorder(Protocol):
+    """Where the loop records a flight: :class:`gcs.flightlog.TlogRecorder` writes a ``.tlog``.
+
+    The loop sees only this, so the flight log (which reads the loop's phases
+    and snapshots back) sits above the loop.
+    """
+
+    def frame(self, t: float, frame: bytes) -> None:
+        """Record one MAVLink frame, in or out."""
+
+    def text(self, t: float, text: str, *, severity: int) -> None:
+        """Record a phase change or a warning."""
+
+    def team(self, t: float, *, ids: tuple[int, ...], edges: np.ndarray, distances: np.ndarray,
+             accel_norm: float, accel_axis: float) -> None:
+        """Record the team, once, before the first tick."""
+
+    def internals(self, t: float, *, arrays: dict[str, np.ndarray],
+                  sticks: tuple[float, float, float], scale: float, altitude: float,
+                  phase: int) -> None:
+        """Record one tick of guidance internals."""
+
+
+@dataclass(frozen=True)
+class Event:
+    """Something the operator should see: a phase change, a warning, an error."""
+
+    t: float
+    level: str  # "info", "warning", "error"
+    text: str
+
+
+@dataclass(frozen=True)
+class TickStats:
+    """Timing of the loop over the recent ticks, s."""
+
+    ticks: int
+    compute_last: float
+    compute_p99: float
+    jitter_p99: float
+    overruns: int
+
+
+@dataclass(frozen=True, eq=False)
+class RuntimeSnapshot:
+    """The state of one tick, for the UI and the metrics (immutable; latest wins)."""
+
+    fleet: FleetState
+    phase: Phase
+    operator: OperatorSnapshot
+    demand: MotionDemand  # what the guidance used (frozen motion: zero sticks)
+    accel_cmd: np.ndarray  # (n, 2) NED m/s^2 sent this tick (zeros when not streaming)
+    distance_errors: np.ndarray  # (m,) m, NaN while unknown
+    safety: SafetyVerdict
+    compute_time: float  # s of wall time, this tick (Runtime.stats() has the percentiles)
+    compute_cpu: float = 0.0  # s of this thread's CPU time, this tick (excludes preemption)
+    events: tuple[Event, ...] = field(default=())
+    truth: SimTruth | None = None  # simulation only: the ground truth of this tick
+
+
+_ON_GCS_SETPOINTS = frozenset({Phase.HOVER, Phase.LIFTING, Phase.FORMATION,
+                               Phase.SETTING_DOWN})
+"""Phases in which every vehicle must stay in the mode that flies the GCS's setpoints."""
+
+
+class Runtime:
+    """The formation loop of one team.
+
+    Args:
+        team: the loaded team.
+        profiles: autopilot profile per vehicle system id (from the LinkManager).
+        clock: where time comes from.
+        operator: the operator command the sources write to.
+        recorder: optional flight recorder.
+        analysis: the team's worst-case analysis (computed if not given).
+        truth_source: in simulation, gives the latest ground truth to record.
+        setpoints_per_tick: setpoints per vehicle and tick (default: from the
+            config's ``guidance.setpoint_rate_hz``; 1 sends only the tick's own).
+    """
+
+    def __init__(self, team: Team, profiles: Mapping[int, AutopilotProfile], clock: Clock,
+                 operator: OperatorCommand, *, recorder: FlightRecorder | None = None,
+                 analysis: Analysis | None = None,
+                 truth_source: Callable[[], SimTruth | None] | None = None,
+                 setpoints_per_tick: int | None = None, gate: StepGate | None = None) -> None:
+        self.team = team
+        self.ids = team.formation.ids
+        missing = [vid for vid in self.ids if vid not in profiles]
+        if missing:
+            raise ValueError(f"no link configured for vehicle(s) {missing}")
+        self.profiles = profiles
+        self._profile_list = [profiles[vid] for vid in self.ids]
+        # one call per tick and vehicle only where the vertical channel is not z itself
+        self._vertical_calls = [(i, p.vertical_setpoint)
+                                for i, p in enumerate(self._profile_list) if not p.vertical_is_z]
+        links = [p.link for p in self._profile_list]
+        targets = np.array([(link.sysid, link.target_component) for link in links]).reshape(-1, 2)
+        self._packer = SetpointPacker(
+            target_system=targets[:, 0], target_component=targets[:, 1],
+            kind=np.array([p.setpoint_kind.type_mask for p in self._profile_list]),
+            boot_time=np.array([link.boot_time for link in links]))
+        self._fanout = Fanout(links)
+        self.fleet_table = FleetTable(self.ids, profiles)
+        """The team's latest telemetry, kept current by the links (the UI reads it too)."""
+        self.clock = clock
+        self.operator = operator
+        self.recorder = recorder
+        self.truth_source = truth_source
+        self.guidance = Guidance.from_team(team)
+        self.analysis: Analysis = analysis if analysis is not None else analyze(team)
+        self._accel_last = 0.0
+        self.period = 1.0 / team.config.guidance.rate_hz
+        self._streaming_modes = tuple(p.streaming_mode for p in self._profile_list)
+        self._landing_modes = tuple(p.landing_modes for p in self._profile_list)
+        # Load the tick's compiled kernels now, on the arrays the tick passes them (as the
+        # guidance does): compiling or loading them at the first tick made it late.
+        fleet = self.fleet_table.read(0.0)
+        _ = fleet.located
+        evaluate(team.config.safety, self.ids, fleet.age, fleet.p_ned, safe_radius=1.0)
+        team.formation.distance_errors(fleet.p_ned[:, :2])
+        finite_max_norm(np.zeros((fleet.n, 2)))
+        self.setpoints_per_tick = (team.config.guidance.setpoints_per_tick
+                                   if setpoints_per_tick is None else setpoints_per_tick)
+        if self.setpoints_per_tick < 1:
+            raise ValueError(f"setpoints_per_tick must be at least 1, got {setpoints_per_tick}")
+        self._streamed: np.ndarray | None = None  # (n, 2) the last tick's setpoints, if streaming
+        self._handing_over = False  # taking off: the vehicles are switching to offboard
+        self.resends = 0
+        """Setpoint rounds re-sent between ticks so far."""
+        self._phase = Phase.CONNECT
+        self._lock = threading.Lock()
+        self._events: collections.deque[Event] = collections.deque(maxlen=200)
+        self._active_warnings: set[tuple[str, int]] = set()
+        self._modes: dict[int, str] = {}
+        self._modes_seen: tuple[str, ...] | None = None
+        self.errors = 0
+        """Error events so far (the event list keeps only the recent ones)."""
+        self.gate = gate if gate is not None else StepGate(enabled=False)
+        """Lets phase actions act only at ticks in lockstep (disabled otherwise)."""
+        # An action and its step per vehicle, twice: the loop may start a landing while an
+        # action is stuck. Fewer and a vehicle's step would queue behind the others (in
+        # lockstep, holding every tick's window until the gate's cap).
+        self._pool = ThreadPoolExecutor(max_workers=2 * (len(self.ids) + 1),
+                                        thread_name_prefix="gcs-action")
+        self._action_busy = threading.Lock()
+        self._abort_at: float | None = None
+        self._compute: collections.deque[float] = collections.deque(maxlen=400)
+        self._jitter: collections.deque[float] = collections.deque(maxlen=400)
+        self._overruns = 0
+        self._ticks = 0
+        self._snapshot: RuntimeSnapshot | None = None
+        self._listeners: list[Callable[[RuntimeSnapshot], None]] = []
+        if recorder is not None:
+            f, lim = team.formation, team.config.limits
+            recorder.team(clock.now(), ids=f.ids, edges=f.edges, distances=f.distances,
+                          accel_norm=lim.accel_norm, accel_axis=lim.accel_axis)
+            for vid in self.ids:
+                profiles[vid].link.add_frame_listener(
+                    lambda _direction, frame: recorder.frame(self.clock.now(), frame))
+
+    # -- state ---------------------------------------------------------------------------
+
+    @property
+    def phase(self) -> Phase:
+        with self._lock:
+            return self._phase
+
+    @property
+    def snapshot(self) -> RuntimeSnapshot | None:
+        """The latest tick's snapshot (None before the first tick)."""
+        return self._snapshot
+
+    def events(self) -> tuple[Event, ...]:
+        """Recent events, oldest first."""
+        with self._lock:
+            return tuple(self._events)
+
+    def add_listener(self, callback: Callable[[RuntimeSnapshot], None]) -> None:
+        """Call ``callback(snapshot)`` after every tick (on the loop thread: keep it short)."""
+        self._listeners.append(callback)
+
+    @property
+    def action_running(self) -> bool:
+        """Whether a phase action (arm, take off, land, resume...) is still running."""
+        return self._action_busy.locked()
+
+    def safe_radius_for(self, accel: float) -> float:
+        """Largest vehicle-to-centroid distance at which ``accel`` (m/s^2) is still available.
+
+        The analysis' safe deformation is this bound at the largest acceleration
+        the guidance may command; the loop applies it to the acceleration it does
+        command (the larger of the last tick's and a floor of a quarter of the
+        limit), so a gently flown team may deform more before its motion freezes.
+        """
+        a = self.analysis
+        cfg = self.team.config
+        demand = max(accel, 0.25 * cfg.limits.accel_norm)
+        return 0.5 * a_safe_span(a.horizontal_force, cfg.airframe.mass, demand,
+                                 a.rope_pull_bound, cfg.payload.rope_length)
+
+    def taut_altitude(self, scale: float) -> float:
+        """Vehicle altitude at which the ropes become taut with the payload on the ground, m."""
+        cfg = self.team.config
+        r = scale * float(self.team.formation.radii.max())
+        return math.sqrt(max(cfg.payload.rope_length**2 - r**2, 0.0))
+
+    def note(self, level: str, text: str) -> None:
+        """Add an event from outside the loop (link presence, UI, gamepad): shown and logged."""
+        if level not in ("info", "warning", "error"):
+            raise ValueError(f"event level must be info, warning or error, got {level!r}")
+        self._event(level, text)
+
+    def _event(self, level: str, text: str) -> None:
+        t = self.clock.now()
+        with self._lock:
+            self._events.append(Event(t, level, text))
+            if level == "error":
+                self.errors += 1
+        if self.recorder is not None:
+            severity = {"info": 6, "warning": 4, "error": 3}[level]
+            self.recorder.text(t, text, severity=severity)
+
+    def _set_phase(self, phase: Phase) -> None:
+        with self._lock:
+            if phase is self._phase:
+                return
+            self._phase = phase
+        self._announce(phase)
+
+    def _announce(self, phase: Phase) -> None:
+        """The event of a phase change (what the page's events and the tests look for)."""
+        self._event("info", f"phase: {phase.text}")
+
+    # -- operator actions ----------------------------------------------------------------
+
+    def request(self, action: Action) -> None:
+        """Start a phase action; returns at once. PhaseError if the phase does not allow it."""
+        if action is Action.ABORT:
+            self._abort()
+            return
+        with self._lock:
+            target = next_phase(self._phase, action)
+        if action in (Action.LIFT, Action.SET_DOWN):
+            # target altitude first: a tick between the two would find the old one
+            # reached and end the phase at once
+            scale = self.operator.snapshot(self.clock.now()).demand.scale
+            base = self.taut_altitude(scale)
+            height = base + (self.team.config.flight.lift_height if action is Action.LIFT
+                             else -self.team.config.flight.takeoff_slack)
+            self.operator.set_altitude(height, now=self.clock.now(),
+                                       rate=self.team.config.flight.lift_rate)
+            self._set_phase(target)
+            return
+        if not self._action_busy.acquire(blocking=False):
+            raise PhaseError(f"cannot {action.text}: another action is still running")
+        self.gate.submit(self._pool, self._run_action, action, target)
+
+    def _abort(self) -> None:
+        """Freeze the motion and start the hold, unless already aborting or landing.
+
+        The phase check and the hold's start are one step under the lock: aborts
+        arrive from several threads at once (every viewer, the gamepad, the safety
+        rules), and a repeated one must not restart the hold (phases.py). The
+        sticks are centred either way; a refused abort (PhaseError) changes nothing.
+        """
+        now = self.clock.now()
+        with self._lock:
+            target = next_phase(self._phase, Action.ABORT)
+            started = target is not self._phase
+            if started:
+                self._phase, self._abort_at = target, now
+        self.operator.release(now=now, source="abort")
+        if started:
+            self._announce(target)
+
+    def _run_action(self, action: Action, target: Phase) -> None:
+        try:
+            if action is Action.ARM:
+                self._for_all("arm", lambda p: p.arm())
+                self._set_phase(target)
+            elif action is Action.DISARM:
+                self._for_all("disarm", lambda p: p.disarm())
+                self._set_phase(target)
+            elif action is Action.TAKEOFF:
+                self._takeoff()
+            elif action is Action.LAND:
+                self._set_phase(target)
+                self._for_all("land", lambda p: p.land())
+            elif action is Action.RESUME:
+                self._resume()
+        except Exception as exc:  # report, never kill the worker
+            self._event("error", f"{action.text} failed: {exc}")
+            if action is Action.ARM:
+                self._for_all("disarm", lambda p: p.disarm(), quiet=True)
+                self._set_phase(Phase.READY)
+        finally:
+            self._action_busy.release()
+
+    def _for_all(self, what: str, fn: Callable[[AutopilotProfile], None], *,
+                 quiet: bool = False, only: Sequence[int] | None = None) -> None:
+        """Run ``fn`` on every vehicle (or those with ids ``only``) in parallel; raise one
+        error naming every failure."""
+        ids = self.ids if only is None else tuple(only)
+        outcomes = self.gate.map(self._pool, fn, [self.profiles[vid] for vid in ids])
+        failures = [f"vehicle {vid}: {exc}" for vid, exc in zip(ids, outcomes, strict=True)
+                    if exc is not None]
+        if failures and not quiet:
+            raise RuntimeError(f"{what}: " + "; ".join(failures))
+
+    def _resume(self) -> None:
+        """Switch back to the streaming mode the vehicles that left it while still flying.
+
+        A vehicle coming down on its own (landing, disarmed) is not resumed: that
+        one lands the team (gcs.loop._safety).
+        """
+        fleet = self.fleet_table.read(self.clock.now())
+        out = [vid for vid, mode, want, down in zip(
+            self.ids, fleet.modes, self._streaming_modes, self._coming_down(fleet), strict=True)
+            if mode != want and not down]
+        if not out:
+            self._event("info", "resume: every flying vehicle is in its streaming mode already")
+            return
+        z = -self.operator.snapshot(self.clock.now()).altitude
+        self._for_all("resume", lambda p: p.start_offboard(z_ned=z), only=out)
+        for vid in out:
+            self._event("info", f"resume: vehicle {vid} back in "
+                                f"{self.profiles[vid].streaming_mode}")
+
+    def _coming_down(self, fleet: FleetState) -> np.ndarray:
+        """(n,) True where a vehicle is disarmed or in one of its profile's landing modes."""
+        return ~fleet.armed | np.array([m in landing for m, landing in zip(
+            fleet.modes, self._landing_modes, strict=True)], dtype=bool)
+
+    def _takeoff(self) -> None:
+        cfg = self.team.config.flight
+        self._set_phase(Phase.TAKING_OFF)
+        scale = self.operator.snapshot(self.clock.now()).demand.scale
+        h0 = self.taut_altitude(scale) - cfg.takeoff_slack
+        self._for_all("take off", lambda p: p.takeoff(altitude_m=h0))
+        deadline = time.monotonic() + cfg.takeoff_timeout
+        while True:
+            fleet = self.fleet_table.read(self.clock.now())
+            alt = -fleet.p_ned[:, 2]
+            if np.all(np.abs(alt - h0) < cfg.altitude_tolerance):
+                break
+            if self.phase is not Phase.TAKING_OFF:
+                return  # aborted meanwhile
+            if time.monotonic() > deadline:
+                low = [vid for vid, a in zip(self.ids, alt, strict=True)
+                       if not abs(a - h0) < cfg.altitude_tolerance]
+                raise RuntimeError(f"vehicles {low} did not reach {h0:.2f} m in "
+                                   f"{cfg.takeoff_timeout:g} s")
+            if not self.gate.pause():
+                time.sleep(0.02)
+        self.operator.reset_altitude(h0, now=self.clock.now())
+        # The loop streams from here on: a vehicle confirmed in offboard must not wait
+        # for the slowest one's confirmation without setpoints (its 0.5 s timeout
+        # sent it to hold on a loaded machine).
+        self._handing_over = True
+        try:
+            self._for_all("offboard", lambda p: p.start_offboard(z_ned=-h0))
+        finally:
+            self._handing_over = False
+        if self.phase is Phase.TAKING_OFF:
+            self._set_phase(Phase.HOVER)
+
+    # -- the loop ------------------------------------------------------------------------
+
+    def tick(self) -> RuntimeSnapshot:
+        """One guidance tick; never raises for a vehicle's fault."""
+        started, started_cpu = time.perf_counter(), time.thread_time()
+        now = self.clock.now()
+        # The phase before the fleet: a phase entered once every vehicle confirmed its mode
+        # then never meets telemetry older than that confirmation.
+        phase = self.phase
+        fleet = self.fleet_table.read(now)
+        if phase is Phase.CONNECT:  # presence is the pre-flight check's business
+            verdict = SafetyVerdict(freeze=True, land=False, events=())
+        else:
+            # The mode rule, only where it applies and some vehicle is out of its mode
+            # (one tuple comparison per tick otherwise).
+            modes: tuple[str, ...] = ()
+            coming_down = None
+            if phase in _ON_GCS_SETPOINTS and fleet.modes != self._streaming_modes:
+                modes = fleet.modes
+                coming_down = self._coming_down(fleet)
+            verdict = evaluate(self.team.config.safety, self.ids, fleet.age, fleet.p_ned,
+                               safe_radius=self.safe_radius_for(self._accel_last), modes=modes,
+                               expected=self._streaming_modes if modes else (),
+                               coming_down=coming_down)
+        self._report_safety(verdict)
+        op = self.operator.snapshot(now)
+        phase = self.phase  # an action may have moved it meanwhile
+        self._report_modes(fleet, phase)
+        if phase is Phase.CONNECT:
+            self._preflight(fleet)
+        elif phase is Phase.LANDING and np.all(np.isfinite(fleet.heartbeat_age)) \
+                and not fleet.armed.any():
+            self._set_phase(Phase.LANDED)
+        if verdict.land and phase.airborne and phase not in (Phase.ABORTING, Phase.LANDING):
+            self.request(Action.ABORT)
+            phase = self.phase
+        moving = phase is Phase.FORMATION and not verdict.freeze and op.guidance_on
+        demand = op.demand if moving else MotionDemand(scale=op.demand.scale)
+        self._streamed = None
+        if self._streams(phase):
+            accel, self._accel_last = self._stream(fleet, demand, op)
+            self._streamed = accel
+            self._advance(phase, op, now)
+        else:
+            accel, self._accel_last = np.zeros((fleet.n, 2)), 0.0
+        errors = self.team.formation.distance_errors(fleet.p_ned[:, :2], demand.scale)
+        truth = self.truth_source() if self.truth_source is not None else None
+        phase = self.phase  # after this tick's transitions: the recorder and the snapshot agree
+        if self.recorder is not None:
+            arrays = {"dist_err": errors, "acc_cmd": accel, "tilt": fleet.tilt}  # NaN: unknown
+            if truth is not None:
+                arrays |= {"payload": np.array(truth.payload_p_ned + truth.payload_v_ned),
+                           "rope_T": np.array(truth.rope_tension),
+                           "veh_true": np.array(truth.vehicle_p_ned)}
+            self.recorder.internals(now, arrays=arrays,
+                                    sticks=(demand.forward, demand.right, demand.rotate),
+                                    scale=demand.scale, altitude=op.altitude, phase=int(phase))
+        self._compute.append(time.perf_counter() - started)
+        cpu = time.thread_time() - started_cpu
+        self._ticks += 1
+        snap = RuntimeSnapshot(fleet=fleet, phase=phase, operator=op, demand=demand,
+                               accel_cmd=accel, distance_errors=errors, safety=verdict,
+                               compute_time=self._compute[-1], compute_cpu=cpu,
+                               events=self.events()[-20:],
+                               truth=truth)
+        self._snapshot = snap
+        # Lockstep: the phase actions and a scenario act now, while the sim stands still
+        # at this tick's time; their effects show in the next tick.
+        if not self.gate.window():
+            self._warn_once(("gate", 0), "lockstep: a phase action was still busy "
+                                         f"{HOLD_CAP_S:g} s after the tick; the sim went on")
+        for listener in self._listeners:
+            try:
+                listener(snap)
+            except Exception as exc:
+                self._event("error", f"listener failed: {exc}")
+        return snap
+
+    def _preflight(self, fleet: FleetState) -> None:
+        fresh = np.isfinite(fleet.age) & (fleet.age < self.team.config.safety.stale_after)
+        if fresh.all() and np.all(np.isfinite(fleet.heartbeat_age)):
+            if not self.analysis.ok:
+                self._warn_once(("analysis", 0), "pre-flight: gcs analyze fails: " +
+                                self.analysis.violations[0].message)
+                return
+            self._set_phase(Phase.READY)
+
+    def _stream(self, fleet: FleetState, demand: MotionDemand,
+                op: OperatorSnapshot) -> tuple[np.ndarray, float]:
+        """Guidance and one setpoint per vehicle (errors are per vehicle): the accelerations
+        sent and the largest one's norm."""
+        if fleet.located:
+            accel = self.guidance.accelerations(fleet.p_ned[:, :2], fleet.v_ned[:, :2],
+                                                fleet.yaw, demand)
+            largest = finite_max_norm(accel)  # what the guidance could not compute becomes 0
+        else:  # cannot place every vehicle: hold still horizontally
+            accel, largest = np.zeros((fleet.n, 2)), 0.0
+        self._send_all(accel, z_ned=-op.altitude)
+        return accel, largest
+
+    def _send_all(self, accel: np.ndarray, *, z_ned: float) -> None:
+        """One setpoint per vehicle, packed for the whole fleet at once; an error is reported
+        once per vehicle, never raised, and that vehicle's setpoint is not sent.
+
+        ``accel`` is finite (:meth:`_stream` zeroes what the guidance could not compute).
+        """
+        if not math.isfinite(z_ned):  # never reaches a vehicle, whatever its profile
+            for i in range(len(self.ids)):
+                self._not_sent(i, f"altitude target not finite: {z_ned}")
+            return
+        vertical = np.full(len(self.ids), z_ned)
+        only = None
+        if self._vertical_calls:  # profiles whose vertical channel is not z itself
+            only = self._vertical_from_profiles(z_ned, vertical)
+        packed = self._packer.pack(time.monotonic(), accel, vertical)
+        for i, exc in self._fanout.send(packed, SETPOINT_MESSAGE.crc_extra, only).items():
+            self._not_sent(i, exc)
+
+    def _vertical_from_profiles(self, z_ned: float, vertical: np.ndarray) -> list[int] | None:
+        """Fill in the vertical channel of the profiles that compute it; the rows that can
+        be sent (None: all), having reported why each other one cannot."""
+        refused = []
+        for i, vertical_setpoint in self._vertical_calls:
+            try:
+                value = float(vertical_setpoint(z_ned))
+            except Exception as exc:
+                refused.append(i)
+                self._not_sent(i, exc)
+                continue
+            if not math.isfinite(value):
+                refused.append(i)
+                self._not_sent(i, f"vertical setpoint not finite: {value}")
+                continue
+            vertical[i] = value
+        if not refused:
+            return None
+        vertical[refused] = 0.0  # packed, never sent
+        return sorted(set(range(len(vertical))) - set(refused))
+
+    def _not_sent(self, i: int, why: Exception | str) -> None:
+        """Warn once that vehicle ``i``'s setpoint was not sent, and why."""
+        vid = self.ids[i]
+        reason = why.what if isinstance(why, LinkError) else str(why)
+        self._warn_once(("send", vid), f"vehicle {vid}: setpoint not sent: {reason}")
+
+    def _streams(self, phase: Phase) -> bool:
+        """Whether the loop sends setpoints in ``phase`` (and during the offboard handover)."""
+        return phase.streaming or (phase is Phase.TAKING_OFF and self._handing_over)
+
+    def resend(self) -> bool:
+        """Re-send the last tick's setpoints (the altitude target's ramp moves on); False if
+        the last tick streamed none or the phase stopped streaming since."""
+        accel = self._streamed
+        if accel is None or not self._streams(self.phase):
+            return False
+        self._send_all(accel, z_ned=-self.operator.snapshot(self.clock.now()).altitude)
+        self.resends += 1
+        return True
+
+    def _advance(self, phase: Phase, op: OperatorSnapshot, now: float) -> None:
+        reached = abs(op.altitude - op.altitude_target) < 1e-6
+        if phase is Phase.LIFTING and reached:
+            self._set_phase(Phase.FORMATION)
+        elif phase is Phase.SETTING_DOWN and reached:
+            self._set_phase(Phase.HOVER)
+        elif (phase is Phase.ABORTING and self._abort_at is not None
+              and now - self._abort_at >= self.team.config.flight.abort_hold):
+            self._abort_at = None
+            self._set_phase(Phase.LANDING)
+            if self._action_busy.acquire(blocking=False):
+                self.gate.submit(self._pool, self._run_action, Action.LAND, Phase.LANDING)
+            else:  # an action is stuck: land directly
+                self.gate.submit(self._pool, functools.partial(
+                    self._for_all, "land", lambda p: p.land(), quiet=True))
+
+    def _report_modes(self, fleet: FleetState, phase: Phase) -> None:
+        """A vehicle changing mode on its own while the GCS streams is a warning."""
+        if fleet.modes == self._modes_seen:  # one comparison on most ticks, not one per vehicle
+            return
+        self._modes_seen = fleet.modes
+        for vid, mode in zip(fleet.ids, fleet.modes, strict=True):
+            before = self._modes.get(vid)
+            self._modes[vid] = mode
+            if before is not None and mode != before:
+                # from lifting on, every vehicle must stay in the mode the GCS put it in
+                level = "warning" if phase in (Phase.LIFTING, Phase.FORMATION,
+                                               Phase.SETTING_DOWN) else "info"
+                self._event(level, f"vehicle {vid}: mode {mode} (was {before})")
+
+    def _report_safety(self, verdict: SafetyVerdict) -> None:
+        active = set()
+        for e in verdict.events:
+            key = (e.reason.name, e.vehicle)
+            active.add(key)
+            if key not in self._active_warnings:
+                self._event("warning", e.text)
+        self._active_warnings = {k for k in self._active_warnings if k[0] in ("send", "analysis")}
+        self._active_warnings |= active
+
+    def _warn_once(self, key: tuple[str, int], text: str) -> None:
+        if key not in self._active_warnings:
+            self._active_warnings.add(key)
+            self._event("warning", text)
+
+    def stats(self) -> TickStats:
+        """Loop timing over the recent ticks."""
+        comp = np.array(self._compute) if self._compute else np.zeros(1)
+        jit = np.array(self._jitter) if self._jitter else np.zeros(1)
+        return TickStats(ticks=self._ticks, compute_last=float(comp[-1]),
+                         compute_p99=float(np.percentile(comp, 99)),
+                         jitter_p99=float(np.percentile(jit, 99)), overruns=self._overruns)
+
+    def run(self, stop: threading.Event) -> None:
+        """Tick at the guidance rate on the clock until ``stop`` is set (or the clock dies).
+
+        The period is cut into ``setpoints_per_tick`` slots: a tick in the first,
+        re-sends in the others. After a stall longer than a period the loop ticks
+        at once and restarts its schedule from there (it skips, never bursts).
+        """
+        n = self.setpoints_per_tick
+        slot = self.period / n
+        k = 0
+        start = self.clock.now()
+        while not stop.is_set():
+            due = start + k * slot
+            try:
+                self.clock.sleep_until(due)
+            except ClockStoppedError as exc:
+                self._event("error", f"loop stopped: {exc}")
+                return
+            now = self.clock.now()
+            late = now - due
+            if late > self.period:
+                self._overruns += 1
+                self._event("warning", f"loop ran {late:.2f} s late: no setpoints for "
+                                       f"{late + slot:.2f} s")
+                start, k = now, 0  # tick now, then keep the schedule from here
+            try:
+                if k % n == 0:
+                    self._jitter.append(late)
+                    self.tick()
+                else:
+                    self.resend()
+            except Exception as exc:  # a bug must not stop the team's setpoint stream silently
+                self._event("error", f"tick failed: {type(exc).__name__}: {exc}")
+            k += 1
+
+    def close(self) -> None:
+        """Stop the worker threads (does not land: that is the operator's or abort's job)."""
+        self.gate.close()
+        self._pool.shutdown(wait=False, cancel_futures=True)

@@ -1,0 +1,179 @@
+"""MAVLink 2 on the wire: what a GCS and a vehicle must agree on, byte for byte.
+
+The dialect, framing and checksums, signing, the setpoint, telemetry and mode
+numbers, the zenoh key names (:mod:`gcs.wire.keys`), and the wire formats of the
+sim clock and the sim's truth. The simulated vehicles (``vehicles/``) and the sim
+host (``sim/``) use this package and nothing of the GCS's link layer.
+
+Modules:
+
+    ``_clockwire``  Wire format of the sim clock and of lockstep acknowledgements on zenoh.
+    ``_crc``        MAVLink's frame checksum (CRC-16/MCRF4XX with the message type's
+                    CRC_EXTRA byte).
+    ``_decoder``    MAVLink byte-stream decoding that never raises: bad input is counted and
+                    dropped.
+    ``_dialect``    The one pymavlink dialect the project speaks, and name look-ups into it.
+    ``_encoder``    MAVLink 2 encoding for one sender (the GCS, or one simulated vehicle).
+    ``_modes``      Flight-mode numbers of every autopilot the GCS drives, in one place.
+    ``_setpoints``  Acceleration setpoints as ``SET_POSITION_TARGET_LOCAL_NED`` (frame
+                    LOCAL_NED).
+    ``_signing``    MAVLink 2 message signing: key files and the check of incoming
+                    signatures.
+    ``_simtruth``   Sim-only truth on the wire: what a real flight cannot measure (payload,
+                    ropes).
+    ``_stamp``      Many packed MAVLink 2 frames numbered and checksummed in one compiled
+                    pass.
+    ``_telemetry``  Latest telemetry of one vehicle, kept as immutable records.
+    ``_unpack``     Building a pymavlink message from a checked MAVLink 2 frame, without
+                    pymavlink's decode.
+    ``keys``        Every zenoh key expression of the fleet, in one place for the GCS and
+                    the sim.
+"""
+
+from gcs.wire import keys
+from gcs.wire._clockwire import (
+    CLOCK_FORMAT,
+    ClockSample,
+    decode_clock,
+    decode_time,
+    encode_clock,
+    encode_time,
+)
+from gcs.wire._crc import frame_crc
+from gcs.wire._decoder import DecodeStats, FrameDecoder
+from gcs.wire._dialect import MavMessage, command_name, mavlink, message_id, message_name
+from gcs.wire._encoder import (
+    DEFAULT_GCS_COMPONENT_ID,
+    DEFAULT_GCS_SYSTEM_ID,
+    EncoderBatch,
+    MavlinkEncoder,
+    distinct_rows,
+    frame_dtype,
+    packed_rows,
+)
+from gcs.wire._modes import (
+    CUSTOM_MODE_ENABLED,
+    SAFETY_ARMED,
+    CopterMode,
+    Px4AutoSubMode,
+    Px4MainMode,
+    SimMode,
+    copter_mode_text,
+    heartbeat_mode_text,
+    px4_custom_mode,
+    px4_mode_text,
+    sim_mode_text,
+    split_px4_custom_mode,
+)
+from gcs.wire._setpoints import (
+    MASK_ACCEL,
+    MASK_ACCEL_XY_POS_Z,
+    SETPOINT_MESSAGE,
+    AccelSetpoint,
+    SetpointKind,
+    SetpointPacker,
+    TypeMask,
+    accel_setpoint_fields,
+    accel_setpoint_message,
+    packed_setpoints,
+    read_setpoint,
+)
+from gcs.wire._signing import (
+    SIGNATURE_LEN,
+    SignatureCheck,
+    SignatureVerifier,
+    SigningKey,
+    load_signing_key,
+    parse_signing_key,
+    signature,
+    signing_timestamp,
+    write_signing_key,
+)
+from gcs.wire._simtruth import SimTruth, vec3
+from gcs.wire._stamp import crc_accumulate, stamp_frames
+from gcs.wire._telemetry import (
+    Attitude,
+    Heartbeat,
+    Imu,
+    LocalPosition,
+    Record,
+    Severity,
+    StatusText,
+    SystemStatus,
+    Telemetry,
+    TelemetryStore,
+)
+from gcs.wire._unpack import HEADER_V2, unpack_v2
+
+__all__ = [
+    "CLOCK_FORMAT",
+    "CUSTOM_MODE_ENABLED",
+    "DEFAULT_GCS_COMPONENT_ID",
+    "DEFAULT_GCS_SYSTEM_ID",
+    "HEADER_V2",
+    "MASK_ACCEL",
+    "MASK_ACCEL_XY_POS_Z",
+    "SAFETY_ARMED",
+    "SETPOINT_MESSAGE",
+    "SIGNATURE_LEN",
+    "AccelSetpoint",
+    "Attitude",
+    "ClockSample",
+    "CopterMode",
+    "DecodeStats",
+    "EncoderBatch",
+    "FrameDecoder",
+    "Heartbeat",
+    "Imu",
+    "LocalPosition",
+    "MavMessage",
+    "MavlinkEncoder",
+    "Px4AutoSubMode",
+    "Px4MainMode",
+    "Record",
+    "SetpointKind",
+    "SetpointPacker",
+    "Severity",
+    "SignatureCheck",
+    "SignatureVerifier",
+    "SigningKey",
+    "SimMode",
+    "SimTruth",
+    "StatusText",
+    "SystemStatus",
+    "Telemetry",
+    "TelemetryStore",
+    "TypeMask",
+    "accel_setpoint_fields",
+    "accel_setpoint_message",
+    "command_name",
+    "copter_mode_text",
+    "crc_accumulate",
+    "decode_clock",
+    "decode_time",
+    "distinct_rows",
+    "encode_clock",
+    "encode_time",
+    "frame_crc",
+    "frame_dtype",
+    "heartbeat_mode_text",
+    "keys",
+    "load_signing_key",
+    "mavlink",
+    "message_id",
+    "message_name",
+    "packed_rows",
+    "packed_setpoints",
+    "parse_signing_key",
+    "px4_custom_mode",
+    "px4_mode_text",
+    "read_setpoint",
+    "signature",
+    "signing_timestamp",
+    "sim_mode_text",
+    "split_px4_custom_mode",
+    "stamp_frames",
+    "unpack_v2",
+    "vec3",
+    "write_signing_key",
+]

@@ -1,0 +1,180 @@
+"""The sim host's side of zenoh: vehicle links and tokens, clock, truth, acks and control.
+
+Why: everything the sim process says or hears on zenoh goes through this
+one object, so the keys (all from :mod:`gcs.wire.keys`) and the wire formats
+are in one place and the host loop never touches zenoh directly:
+
+=================================================  =====  ======================================
+key                                                dir    payload
+=================================================  =====  ======================================
+``fleet/<f>/vehicle/<sysid>/mavlink/from_vehicle`` out    whole MAVLink 2 frames
+``fleet/<f>/vehicle/<sysid>/mavlink/to_vehicle``   in     MAVLink 2 frames
+``fleet/<f>/alive/<sysid>``                        token  liveliness, while the vehicle lives
+``fleet/<f>/clock``                                out    sim time (:mod:`gcs.wire._clockwire`)
+``fleet/<f>/clock/ack``                            in     lockstep ack (:mod:`gcs.wire._clockwire`)
+``fleet/<f>/sim/truth``                            out    :class:`gcs.wire._simtruth.SimTruth` JSON
+``fleet/<f>/sim/control``                          in     :mod:`sim._faults` JSON
+=================================================  =====  ======================================
+
+Receivers run on zenoh's threads: vehicle frames go to the host's
+``on_frame`` callback, everything else is pushed into its
+:class:`~sim._inbox.Inbox`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import threading
+from collections.abc import Callable, Sequence
+
+import zenoh
+
+from gcs.transport import ZenohSettings, ZenohTransport, declare_alive, open_session
+from gcs.wire import SimTruth, decode_time, encode_clock, keys
+from sim._inbox import ClockAck, ControlMessage, Inbox
+
+__all__ = ["CONTROL_TOPIC", "TRUTH_TOPIC", "HostFabric"]
+
+_log = logging.getLogger(__name__)
+
+TRUTH_TOPIC = "truth"
+"""Sim topic of the ground truth samples."""
+
+CONTROL_TOPIC = "control"
+"""Sim topic of the control messages (kill, cut, restore)."""
+
+
+class _VehicleLink:
+    """One vehicle's zenoh transport and liveliness token."""
+
+    def __init__(self, session: zenoh.Session, fleet: str, sysid: int, index: int,
+                 on_frame: Callable[[int, bytes], None]) -> None:
+        # Frames block rather than drop: on loopback a full queue means a busy CPU, not a
+        # radio, and lost telemetry would make lockstep runs differ. A peer that goes away
+        # closes its link, so nothing waits on it for long.
+        self.transport = ZenohTransport(
+            session, tx_key=keys.mavlink(fleet, sysid, keys.Direction.FROM_VEHICLE),
+            rx_key=keys.mavlink(fleet, sysid, keys.Direction.TO_VEHICLE),
+            description=f"zenoh vehicle end fleet/{fleet}/vehicle/{sysid}",
+            congestion=zenoh.CongestionControl.BLOCK)
+        self.transport.start(lambda data: on_frame(index, data))
+        self.token: zenoh.LivelinessToken | None = declare_alive(session, fleet=fleet,
+                                                                 sysid=sysid)
+
+    def close(self) -> None:
+        # The token first: it is what tells every watcher the vehicle is gone, at once.
+        if self.token is not None:
+            with contextlib.suppress(zenoh.ZError):
+                self.token.undeclare()
+            self.token = None
+        self.transport.close()
+
+
+class HostFabric:
+    """Opens the host's zenoh session and declares everything; :meth:`close` undoes it."""
+
+    def __init__(self, settings: ZenohSettings, *, fleet: str, sysids: Sequence[int],
+                 inbox: Inbox, on_frame: Callable[[int, bytes], None],
+                 announce_sent: bool = False) -> None:
+        """``on_frame(index, payload)`` runs on zenoh's threads for each vehicle's payload.
+
+        ``announce_sent`` (lockstep): every clock sample carries how many truth
+        samples and how many payloads of each vehicle were published
+        (:func:`gcs.wire._clockwire.encode_clock`), and truth is never dropped.
+        """
+        self._fleet = keys.check_fleet(fleet)
+        self._sysids = tuple(sysids)
+        self._announce_sent = announce_sent
+        self._sent = [0] * len(self._sysids)
+        self._truth_sent = 0
+        self._sent_lock = threading.Lock()  # receive threads send echoes, the loop telemetry
+        self._settings = settings
+        self._session = open_session(settings)
+        self._links: dict[int, _VehicleLink] = {}
+        self._subscribers: list[zenoh.Subscriber] = []
+        try:
+            # The clock paces the GCS loop: at real-time priority it has a queue of its
+            # own, so a backlog of telemetry (which blocks) cannot crowd it out; on a
+            # full queue it drops, as the next sample supersedes it anyway.
+            self._clock = self._session.declare_publisher(
+                keys.clock(fleet), congestion_control=zenoh.CongestionControl.DROP,
+                priority=zenoh.Priority.REAL_TIME, express=True)
+            self._truth = self._session.declare_publisher(
+                keys.sim(fleet, TRUTH_TOPIC), congestion_control=(
+                    zenoh.CongestionControl.BLOCK if announce_sent
+                    else zenoh.CongestionControl.DROP),
+                priority=zenoh.Priority.DATA_LOW, express=True)
+            self._subscribers.append(self._session.declare_subscriber(
+                keys.clock_ack(fleet), lambda s: self._on_ack(s, inbox)))
+            self._subscribers.append(self._session.declare_subscriber(
+                keys.sim(fleet, CONTROL_TOPIC),
+                lambda s: inbox.put(ControlMessage(s.payload.to_bytes()))))
+            for index, sysid in enumerate(sysids):
+                self._links[index] = _VehicleLink(self._session, fleet, sysid, index, on_frame)
+        except BaseException:
+            self.close()
+            raise
+
+    @property
+    def fleet(self) -> str:
+        """The fleet name in every key."""
+        return self._fleet
+
+    @property
+    def settings(self) -> ZenohSettings:
+        """How the session joined zenoh (listen and connect endpoints)."""
+        return self._settings
+
+    def send_frame(self, index: int, frame: bytes) -> None:
+        """Publish a frame of vehicle ``index`` (dropped once the vehicle is gone)."""
+        link = self._links.get(index)
+        if link is not None:
+            if self._announce_sent:
+                with self._sent_lock:  # counted with the send: a sample never announces less
+                    link.transport.send(frame)
+                    self._sent[index] += 1
+            else:
+                link.transport.send(frame)
+
+    def drop_vehicle(self, index: int) -> None:
+        """Vehicle ``index`` is gone: close its link and undeclare its token."""
+        link = self._links.pop(index, None)
+        if link is not None:
+            link.close()
+
+    def publish_clock(self, t: float) -> None:
+        """Publish the sim time (with each vehicle's payload count when announcing)."""
+        if not self._announce_sent:
+            self._clock.put(encode_clock(t))
+            return
+        with self._sent_lock:
+            sent = dict(zip(self._sysids, self._sent, strict=True))
+        self._clock.put(encode_clock(t, self._truth_sent, sent))
+
+    def publish_truth(self, truth: SimTruth) -> None:
+        """Publish one ground-truth sample."""
+        self._truth.put(truth.to_bytes())
+        self._truth_sent += 1  # the loop's thread only, as the clock
+
+    def close(self) -> None:
+        """Undeclare everything and close the session; idempotent. The session is closed
+        whatever else fails: a process that exits with it open keeps its vehicles' tokens
+        alive for the peers until zenoh's lease runs out (seconds)."""
+        try:
+            for index in list(self._links):
+                self.drop_vehicle(index)
+            for sub in self._subscribers:
+                with contextlib.suppress(zenoh.ZError):
+                    sub.undeclare()
+            self._subscribers.clear()
+        finally:
+            with contextlib.suppress(zenoh.ZError):
+                self._session.close()
+
+    @staticmethod
+    def _on_ack(sample: zenoh.Sample, inbox: Inbox) -> None:
+        try:
+            inbox.put(ClockAck(decode_time(sample.payload.to_bytes())))
+        except ValueError as exc:
+            _log.warning("ignored clock ack: %s", exc)

@@ -1,0 +1,331 @@
+"""The sim host: one process running the whole team and speaking MAVLink for every vehicle.
+
+Why: the vehicles are coupled through the payload, so physics and the
+onboard autopilots of the whole team step together in one loop, while each
+vehicle is still a separate MAVLink system to the outside (zenoh, and UDP on
+request), exactly like a team of real autopilots.
+
+The loop, per chunk of :data:`CHUNK_S` of sim time:
+
+1. wait until the chunk may run: wall-time pacing (``speed``) and, with
+   ``lockstep``, until the GCS's last clock ack is at most one guidance
+   period behind; while waiting, inbound events are handled as they arrive
+   (a setpoint's echo has already left from the receive thread, see
+   :meth:`vehicles.endpoint.VehicleEndpoint.take`);
+2. handle every event that arrived (frames, acks, control messages);
+3. step world and autopilots in lockstep (:meth:`sim._world.World.run`);
+4. let every endpoint send what is due, publish the clock, and the ground
+   truth every :data:`TRUTH_PERIOD_S`.
+
+Start: the team stands on the ground in its desired shape around the NED
+origin, heading 0, the payload on the ground at the centroid
+(:mod:`sim._team_layout`). The first chunk runs during construction (it
+compiles or loads the numba kernels, which can take a while), so a host is
+responsive once constructed and its clock starts at :data:`CHUNK_S`.
+"""
+
+from __future__ import annotations
+
+import functools
+import logging
+import math
+import time
+from enum import Enum
+from pathlib import Path
+
+import numpy as np
+
+from gcs.config import Team
+from gcs.wire import SigningKey, SimTruth, load_signing_key, vec3
+from sim._config import WorldConfig
+from sim._fabric import HostFabric
+from sim._faults import ControlAction, parse_control
+from sim._inbox import ClockAck, ControlMessage, Event, Inbox, Received, Stop
+from sim._options import HostOptions
+from sim._pacing import Pacer
+from sim._priority import BackgroundStepping
+from sim._ready_team import build_team
+from sim._team_layout import team_layout
+from sim._udp import UdpPorts
+from vehicles import AutopilotConfig
+from vehicles.endpoint import VehicleEndpoint
+
+__all__ = ["CHUNK_S", "CLOCK_REPUBLISH_S", "TRUTH_PERIOD_S", "SimHost", "VehicleStatus"]
+
+_log = logging.getLogger(__name__)
+
+CHUNK_S = 1.0 / 128.0
+"""Sim time stepped between two looks at the inbox, s (4 autopilot steps)."""
+
+TRUTH_PERIOD_S = 1.0 / 20.0
+"""Sim time between two ground-truth samples, s."""
+
+CLOCK_REPUBLISH_S = 0.1
+"""While a lockstep host waits for an ack, it repeats its clock this often (wall s)."""
+
+LIFT_LAG_S = 0.05
+"""A paced host this far behind wall time steps at normal CPU priority until it caught up, s."""
+
+_EPS = 1e-9
+
+
+class VehicleStatus(Enum):
+    """Whether a vehicle's link works (control topic: cut, restore, kill)."""
+
+    LIVE = "live"
+    CUT = "link cut"
+    KILLED = "killed"
+
+
+class SimHost:
+    """World, autopilots, one MAVLink endpoint per vehicle, zenoh and UDP; run with :meth:`run`.
+
+    Construction opens the zenoh session (and the UDP ports), so the host is
+    reachable as soon as it returns. Close with :meth:`close`.
+    """
+
+    def __init__(self, team: Team, options: HostOptions, *, world_config: WorldConfig,
+                 autopilot_config: AutopilotConfig) -> None:
+        cfg = team.config
+        self._options = options
+        self._sysids = tuple(team.formation.ids)
+        self._period = 1.0 / cfg.guidance.rate_hz
+        signing_keys = _signing_keys(team)
+        self._world, self._autopilot = build_team(
+            team_layout(team, ground_z_ned=world_config.ground.z_ned),
+            payload_mass=cfg.payload.mass, rng=np.random.default_rng(options.seed),
+            airframe=cfg.airframe, world_config=world_config,
+            autopilot_config=autopilot_config)
+        self._world.run(self._autopilot, CHUNK_S)  # warm-up: compile or load the kernels now
+        self._inbox = Inbox()
+        self._status = [VehicleStatus.LIVE] * len(self._sysids)
+        self._pacer = Pacer(options.speed)
+        self._due: float | None = None  # wall time the chunk being stepped was due (paced)
+        # lockstep: nothing past the first chunk runs before a GCS acks its first tick, so
+        # what the GCS sees does not depend on when it connected
+        self._acked = -math.inf
+        self._stopping = False
+        self._next_truth = 0.0
+        self._udp: UdpPorts | None = None
+        self._receiving = False  # set once constructed: earlier frames are dropped, as at boot
+        measurements = self._world.measurements()
+        self._endpoints = [  # before any receiver: frames may arrive at once
+            VehicleEndpoint(self._autopilot, k, sysid=sysid, measurements=measurements,
+                            send=functools.partial(self._send, k),
+                            signing_key=signing_keys.get(sysid))
+            for k, sysid in enumerate(self._sysids)]
+        self._fabric = HostFabric(options.zenoh_settings(),
+                                  fleet=options.fleet or cfg.gcs.fleet, sysids=self._sysids,
+                                  inbox=self._inbox, on_frame=self._receive,
+                                  announce_sent=options.lockstep)
+        try:
+            if options.udp:
+                self._udp = UdpPorts(len(self._sysids), base_port=options.udp_base_port,
+                                     gcs_port=options.udp_gcs_port, on_datagram=self._receive)
+        except BaseException:
+            self._fabric.close()
+            raise
+        self._receiving = True
+
+    # -- facts ----------------------------------------------------------------------------------
+
+    @property
+    def t(self) -> float:
+        """Sim time, s."""
+        return self._world.t
+
+    @property
+    def fleet(self) -> str:
+        """Fleet name in the zenoh keys."""
+        return self._fabric.fleet
+
+    def ready_line(self) -> str:
+        """One line naming every endpoint, printed when the host is reachable."""
+        zenoh = self._fabric.settings
+        parts = [f"fleet {self.fleet}", f"{len(self._sysids)} vehicles",
+                 f"zenoh listen {' '.join(zenoh.listen) or 'none'}"]
+        if zenoh.connect:
+            parts.append(f"connect {' '.join(zenoh.connect)}")
+        speed = self._pacer.speed
+        parts.append("speed max" if speed is None else f"speed {speed:g}x")
+        if self._options.lockstep:
+            parts.append(f"lockstep {self._period:g} s")
+        elif self._options.background:
+            parts.append("background")
+        if self._udp is not None:
+            ports = " ".join(f"{s}=127.0.0.1:{p}" for s, p in zip(self._sysids, self._udp.ports,
+                                                                   strict=True))
+            gcs = self._udp.gcs_port
+            parts.append(f"udp {ports}" + (f" -> gcs 127.0.0.1:{gcs}" if gcs else ""))
+        return "sim ready: " + ", ".join(parts)
+
+    # -- running --------------------------------------------------------------------------------
+
+    def stop(self) -> None:
+        """Ask :meth:`run` to return after the current chunk; safe from signal handlers."""
+        self._inbox.put(Stop())
+
+    def run(self) -> None:
+        """Step until :meth:`stop`, or the first chunk boundary at or after the duration; blocks."""
+        # A lockstep host is what the GCS waits for at every tick: never in the background.
+        priority = BackgroundStepping(self._behind) \
+            if self._options.background and not self._options.lockstep else None
+        if priority is not None and not priority.start():
+            _log.warning("--background: this process may not raise a thread's priority again "
+                         "(root or CAP_SYS_NICE needed), so the loop steps at normal priority")
+        try:
+            self._step_until_stopped(priority)
+        finally:
+            if priority is not None:
+                priority.close()
+                if priority.lifts:
+                    _log.info("fell behind wall time %d times (stepped at normal priority "
+                              "until caught up)", priority.lifts)
+
+    def _step_until_stopped(self, priority: BackgroundStepping | None) -> None:
+        duration = self._options.duration
+        self._fabric.publish_clock(self.t)
+        while not self._stopping:
+            if duration is not None and self.t >= duration - _EPS:
+                break
+            target = self.t + CHUNK_S
+            self._wait_until_due(target, priority)
+            if self._stopping:
+                break
+            self._drain()
+            self._world.run(self._autopilot, CHUNK_S)
+            self._after_chunk()
+
+    def close(self) -> None:
+        """Log each vehicle's link counters, then close zenoh and UDP; idempotent."""
+        for endpoint in self._endpoints:
+            c = endpoint.counters()
+            _log.info("vehicle %d: %d frames, %d garbage bytes, %d dropped, %d not for it, "
+                      "%d setpoints (%d refused), %d commands", endpoint.sysid, c.decode.frames,
+                      c.decode.garbage_bytes, c.decode.dropped, c.not_for_us,
+                      c.setpoints_accepted + c.setpoints_refused, c.setpoints_refused,
+                      c.commands)
+        self._fabric.close()
+        if self._udp is not None:
+            self._udp.close()
+
+    def _behind(self) -> bool:
+        """Whether the chunk being stepped is overdue by more than :data:`LIFT_LAG_S` (any
+        thread)."""
+        due = self._due
+        return due is not None and time.monotonic() - due > LIFT_LAG_S
+
+    def _wait_until_due(self, target: float, priority: BackgroundStepping | None) -> None:
+        """Handle events until ``target`` may be simulated (pacing and lockstep allow it)."""
+        while not self._stopping:
+            if self._options.lockstep and target > self._acked + self._period + _EPS:
+                if not self._handle(self._inbox.get(CLOCK_REPUBLISH_S)):
+                    self._fabric.publish_clock(self.t)  # for a GCS that joined late
+                continue
+            deadline = self._pacer.deadline(target)
+            self._due = deadline
+            wait = 0.0 if deadline is None else deadline - time.monotonic()
+            if wait <= 0.0:
+                return
+            if priority is not None:
+                priority.keeping_up()
+            self._handle(self._inbox.get(wait))
+
+    def _after_chunk(self) -> None:
+        t = self.t
+        for k, endpoint in enumerate(self._endpoints):
+            if self._status[k] is not VehicleStatus.KILLED:
+                endpoint.update(t)
+                self._drain()  # keep command acks prompt while telemetry goes out
+        if t >= self._next_truth - _EPS:
+            self._next_truth += TRUTH_PERIOD_S  # keeps the 20 Hz phase between chunk times
+            if self._next_truth <= t:
+                self._next_truth = t + TRUTH_PERIOD_S
+            self._fabric.publish_truth(self._truth())
+        self._fabric.publish_clock(t)  # last: a lockstep sample counts what went before
+
+    def _truth(self) -> SimTruth:
+        w = self._world
+        return SimTruth(
+            t=w.t, ids=self._sysids,
+            vehicle_p_ned=tuple(vec3(p) for p in w.p_ned),
+            payload_p_ned=vec3(w.payload_p_ned), payload_v_ned=vec3(w.payload_v_ned),
+            rope_tension=tuple(float(x) for x in w.rope_tension))
+
+    # -- events ---------------------------------------------------------------------------------
+
+    def _drain(self) -> None:
+        """Handle every event already waiting, without waiting for more."""
+        while self._handle(self._inbox.get(0.0)):
+            pass
+
+    def _handle(self, event: Event | None) -> bool:
+        """Act on one event; False if there was none."""
+        if event is None:
+            return False
+        if isinstance(event, Received):
+            if self._status[event.index] is VehicleStatus.LIVE:
+                self._endpoints[event.index].apply(event.inbound, self.t)
+        elif isinstance(event, ClockAck):
+            self._acked = max(self._acked, event.t)
+        elif isinstance(event, ControlMessage):
+            self._control(event.data)
+        else:
+            self._stopping = True
+        return True
+
+    def _control(self, data: bytes) -> None:
+        try:
+            command = parse_control(data)
+        except ValueError as exc:
+            _log.warning("ignored control message: %s", exc)
+            return
+        if command.sysid not in self._sysids:
+            _log.warning("ignored control message: no vehicle %d", command.sysid)
+            return
+        k = self._sysids.index(command.sysid)
+        status = self._status[k]
+        if status is VehicleStatus.KILLED:
+            _log.warning("ignored control message: vehicle %d is dead", command.sysid)
+            return
+        self._status[k] = _NEXT_STATUS[command.action]
+        if command.action is ControlAction.KILL:
+            self._fabric.drop_vehicle(k)
+            self._autopilot.disarm(k, force=True)
+        _log.info("vehicle %d %s at t = %.3f s", command.sysid, command.action.text, self.t)
+
+    def _receive(self, index: int, data: bytes, peer: tuple[str, int] | None = None) -> None:
+        """A payload for vehicle ``index`` (receive threads): echo now, the rest to the loop."""
+        if not self._receiving or self._status[index] is not VehicleStatus.LIVE:
+            return
+        if peer is not None and self._udp is not None:
+            self._udp.learn(index, peer)  # before the echo, which goes to learned peers
+        self._endpoints[index].take(
+            data, self._world.t, lambda inbound: self._inbox.put(Received(index, inbound)))
+
+    def _send(self, index: int, frame: bytes) -> None:
+        if self._status[index] is not VehicleStatus.LIVE:
+            return
+        self._fabric.send_frame(index, frame)
+        if self._udp is not None:
+            self._udp.send(index, frame)
+
+
+_NEXT_STATUS = {
+    ControlAction.KILL: VehicleStatus.KILLED,
+    ControlAction.CUT: VehicleStatus.CUT,
+    ControlAction.RESTORE: VehicleStatus.LIVE,
+}
+
+
+def _signing_keys(team: Team) -> dict[int, SigningKey]:
+    """Each vehicle's signing key from the team file's ``links`` (paths relative to it)."""
+    base = Path(team.source).parent
+    out: dict[int, SigningKey] = {}
+    for link in team.config.vehicle_links():
+        path = link.signing_key_path(base)
+        if path is not None:
+            out[link.sysid] = load_signing_key(path)
+    return out
+
+

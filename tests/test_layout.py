@@ -1,0 +1,183 @@
+"""The house rules of the code base, checked: public APIs, layering, imports that do no work.
+
+Each package's ``__init__`` states its API (``__all__``); its other modules are
+private (``_name.py``) and no other package reaches into them. Packages form
+layers without cycles, the simulated vehicles load nothing of the GCS's link
+layer, and importing any package runs no work (the numba cache check waits for
+the first kernel built).
+"""
+
+from __future__ import annotations
+
+import ast
+import importlib
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+TREES = ("gcs", "vehicles", "sim", "web")
+
+
+def _packages() -> list[str]:
+    return sorted(".".join(p.parent.relative_to(ROOT).parts)
+                  for tree in TREES for p in (ROOT / tree).rglob("__init__.py"))
+
+
+def _modules() -> dict[str, Path]:
+    out = {}
+    for tree in TREES:
+        for p in (ROOT / tree).rglob("*.py"):
+            parts = p.relative_to(ROOT).with_suffix("").parts
+            out[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = p
+    return out
+
+
+def _package_of(module: str, modules: dict[str, Path]) -> str:
+    """The package a module belongs to (a package's own ``__init__`` belongs to it)."""
+    return module if modules[module].name == "__init__.py" else module.rpartition(".")[0]
+
+
+def _imports(path: Path) -> list[str]:
+    """Every module an import statement of ``path`` names (``from a import b`` gives a and a.b)."""
+    names = []
+    for node in ast.walk(ast.parse(path.read_text("utf-8"))):
+        if isinstance(node, ast.Import):
+            names += [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.module and not node.level:
+            names += [node.module] + [f"{node.module}.{a.name}" for a in node.names]
+    return names
+
+
+def _resolve(name: str, modules: dict[str, Path]) -> str | None:
+    """The project module ``name`` refers to, or None for an outside or attribute name."""
+    return name if name in modules else None
+
+
+def package_graph() -> dict[str, set[str]]:
+    """Package -> the packages its modules import (entry points ``__main__`` left out)."""
+    modules = _modules()
+    graph: dict[str, set[str]] = {pkg: set() for pkg in _packages()}
+    for name, path in modules.items():
+        if path.stem == "__main__":
+            continue  # nothing imports an entry point: it closes no cycle
+        here = _package_of(name, modules)
+        for imported in _imports(path):
+            target = _resolve(imported, modules)
+            if target is not None:
+                there = _package_of(target, modules)
+                if there != here:
+                    graph[here].add(there)
+    return graph
+
+
+def find_cycle(graph: dict[str, set[str]]) -> list[str] | None:
+    """One cycle of ``graph`` as a path that ends where it starts, or None."""
+    state: dict[str, int] = {}
+    stack: list[str] = []
+
+    def visit(node: str) -> list[str] | None:
+        state[node] = 1
+        stack.append(node)
+        for nxt in sorted(graph[node]):
+            if state.get(nxt) == 1:
+                return [*stack[stack.index(nxt):], nxt]
+            if nxt not in state and (found := visit(nxt)) is not None:
+                return found
+        stack.pop()
+        state[node] = 2
+        return None
+
+    for node in sorted(graph):
+        if node not in state and (found := visit(node)) is not None:
+            return found
+    return None
+
+
+@pytest.mark.parametrize("package", _packages())
+def test_a_package_states_its_public_api(package: str) -> None:
+    mod = importlib.import_module(package)
+    api = getattr(mod, "__all__", None)
+    assert api is not None, f"{package} has no __all__"
+    assert mod.__doc__, f"{package} has no docstring"
+    for name in api:
+        assert hasattr(mod, name), f"{package}.__all__ names {name!r}, which it does not define"
+    folder = ROOT / package.replace(".", "/")
+    public = sorted(p.stem for p in folder.glob("*.py")
+                    if not p.stem.startswith("_") and p.stem != "cli")
+    public += sorted(p.parent.name for p in folder.glob("*/__init__.py"))
+    missing = [m for m in public if m not in api]
+    assert not missing, f"{package}: public modules missing from __all__: {missing}"
+
+
+def test_no_package_reaches_into_another_packages_private_modules() -> None:
+    modules = _modules()
+    offences = []
+    for name, path in modules.items():
+        here = _package_of(name, modules)
+        for imported in _imports(path):
+            target = _resolve(imported, modules)
+            if target is None or _package_of(target, modules) == here:
+                continue
+            if target.rpartition(".")[2].startswith("_") and not target.endswith("__main__"):
+                offences.append(f"{name} imports {target}")
+    assert not offences, "\n".join(offences)
+
+
+def test_the_packages_have_no_import_cycle() -> None:
+    cycle = find_cycle(package_graph())
+    assert cycle is None, "package cycle: " + " -> ".join(cycle or [])
+
+
+def test_the_cycle_check_finds_a_cycle() -> None:
+    graph = package_graph()
+    assert find_cycle(graph) is None
+    graph["gcs.wire"].add("gcs.link")  # the wire using the link layer, as it once did
+    assert find_cycle(graph) is not None
+
+
+def test_the_layers_are_as_documented() -> None:
+    graph = package_graph()
+    below = {
+        "gcs.common": set(),
+        "gcs.wire": {"gcs.common"},
+        "gcs.transport": {"gcs.common", "gcs.wire"},
+        "vehicles": {"gcs.common", "gcs.wire"},
+        "gcs.formation": {"gcs.common"},
+    }
+    for pkg, allowed in below.items():
+        assert graph[pkg] <= allowed, f"{pkg} imports {sorted(graph[pkg] - allowed)}"
+    for pkg in ("vehicles", "sim"):
+        assert not {p for p in graph[pkg] if p in
+                    ("gcs.link", "gcs.loop", "gcs.flightlog", "gcs.app", "web")}, pkg
+
+
+def _loaded_after(statement: str) -> set[str]:
+    code = f"import sys\n{statement}\nprint(' '.join(sorted(sys.modules)))"
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True,
+                         text=True, timeout=120, check=True)
+    return set(out.stdout.split())
+
+
+def test_a_simulated_vehicle_loads_nothing_of_the_gcs_link_layer() -> None:
+    loaded = _loaded_after("import vehicles.endpoint")
+    gcs = sorted(m for m in loaded if m.split(".")[0] == "gcs")
+    assert "gcs.wire" in loaded  # it does speak the wire
+    assert not [m for m in gcs if m.split(".")[1:2] not in (["common"], ["wire"], [])], gcs
+    assert "pymavlink.mavutil" not in loaded
+
+
+def test_importing_the_packages_does_no_work() -> None:
+    code = ("import gcs, gcs.app, gcs.flightlog, vehicles, sim, web\n"
+            "from gcs.common import _jit_cache\n"
+            "print(sorted(_jit_cache._checked))\n"
+            "from gcs.wire import crc_accumulate\n"
+            "crc_accumulate(0, 0xFFFF)\n"
+            "print(sorted(_jit_cache._checked))\n")
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True,
+                         text=True, timeout=300, check=True)
+    after_import, after_kernel = out.stdout.splitlines()
+    assert after_import == "[]"  # no cache check, no file touched, at import
+    assert after_kernel == "['gcs']"  # the first kernel built checks its tree's cache

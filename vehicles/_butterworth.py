@@ -1,0 +1,41 @@
+"""Second-order Butterworth low-pass filters for the INDI loops.
+
+INDI needs the measured signal and the actuator/attitude state delayed by the
+same filter, so every signal of one loop shares one coefficient set. Filters
+run as transposed direct-form-II biquads on a state array ``z[..., 2]`` so a
+whole batch of vehicles and signals lives in one preallocated array.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.signal import butter
+
+from gcs.common import kernel
+
+__all__ = ["biquad_reset", "biquad_step", "butterworth2"]
+
+
+def butterworth2(cutoff_hz: float, sample_rate_hz: float) -> np.ndarray:
+    """Coefficients ``[b0, b1, b2, a1, a2]`` of a 2nd-order low-pass (a0 normalised to 1)."""
+    if not 0.0 < cutoff_hz < 0.5 * sample_rate_hz:
+        raise ValueError(f"cutoff {cutoff_hz} Hz must lie between 0 and the Nyquist frequency "
+                         f"{0.5 * sample_rate_hz} Hz")
+    b, a = butter(2, cutoff_hz, btype="low", fs=sample_rate_hz)
+    return np.array([b[0], b[1], b[2], a[1], a[2]], dtype=np.float64)
+
+
+@kernel()
+def biquad_step(coef: np.ndarray, z: np.ndarray, i: int, j: int, x: float) -> float:
+    """Filter one new sample ``x`` of signal ``j`` of vehicle ``i``; returns the output."""
+    y = coef[0] * x + z[i, j, 0]
+    z[i, j, 0] = coef[1] * x - coef[3] * y + z[i, j, 1]
+    z[i, j, 1] = coef[2] * x - coef[4] * y
+    return y
+
+
+@kernel()
+def biquad_reset(coef: np.ndarray, z: np.ndarray, i: int, j: int, x: float) -> None:
+    """Set the state to the steady state of a constant input ``x`` (output equals ``x``)."""
+    z[i, j, 1] = (coef[2] - coef[4]) * x
+    z[i, j, 0] = (coef[1] - coef[3]) * x + z[i, j, 1]

@@ -1,0 +1,151 @@
+"""``gcs demo`` and ``gcs run``: a GCS with its page (and gamepad), until Ctrl-C.
+
+* demo: starts the simulated team (``python -m sim`` at 1x on a free loopback
+  port), a GCS on the wall clock (as with real vehicles) joined to it over
+  embedded zenoh (peer mode, no router) and the page, in one command.
+* run: the GCS on the wall clock for the vehicles its config's links reach (a
+  ``gcs sim`` started by hand, or real autopilots), with its page.
+
+Ctrl-C (or SIGTERM) stops the page, the gamepad, the GCS and the simulator,
+in that order. The page binds 127.0.0.1 unless another host is asked for.
+"""
+
+from __future__ import annotations
+
+import signal
+import sys
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+from types import FrameType
+
+from gcs.app import GcsApp, SimProcess, free_tcp_port
+from gcs.common import LOCAL_CONFIGS, default_config
+from gcs.config import load_team
+from gcs.loop import Action, Gamepad, PhaseError, load_gamepad_config
+from gcs.transport import ZenohSettings
+from web._ui import WebUi
+
+__all__ = ["DEFAULT_GAMEPAD", "default_gamepad", "run_demo", "run_gcs", "serve"]
+
+DEFAULT_GAMEPAD = LOCAL_CONFIGS / "gamepad.yaml"
+"""Gamepad mapping used when none is named (if the file exists), see :func:`default_gamepad`."""
+
+
+def default_gamepad() -> Path:
+    """configs/gamepad.yaml here, else the one beside the installed package.
+
+    The same rule as the default team (``gcs.cli``): a project directory's own
+    mapping wins, and ``gcs demo`` started from anywhere else still finds the
+    shipped one (relative to the current directory alone, the pad was silently
+    off there).
+    """
+    return default_config(DEFAULT_GAMEPAD.name)
+
+
+def _say(text: str) -> None:
+    print(text, flush=True)
+
+
+def _start_gamepad(app: GcsApp, mapping: Path | None,
+                   may_steer: Callable[[], bool]) -> Gamepad | None:
+    """The gamepad reader, or None (with a line saying why) when there is none to run.
+
+    ``may_steer`` says when the pad may steer: while no browser holds control.
+    """
+    path = mapping if mapping is not None else default_gamepad()
+    if mapping is None and not path.is_file():
+        _say(f"gamepad: off ({path} not found)")
+        return None
+    config = load_gamepad_config(path)
+
+    def request(action: Action) -> Callable[[], None]:
+        def run() -> None:
+            try:
+                app.loop.request(action)
+            except PhaseError as exc:
+                _say(f"gamepad: {action.text} refused: {exc}")
+        return run
+
+    pad = Gamepad(config, app.operator, app.clock, on_abort=request(Action.ABORT),
+                  on_resume=request(Action.RESUME), may_steer=may_steer,
+                  on_fault=lambda text: app.loop.note("warning", text))
+    try:
+        pad.start()
+    except RuntimeError as exc:
+        _say(f"{exc}: gamepad off")
+        return None
+    _say(f"gamepad: mapping {path}; plug a pad in at any time (it steers while no browser "
+         "holds control)")
+    return pad
+
+
+def _raise_interrupt(_signum: int, _frame: FrameType | None) -> None:
+    raise KeyboardInterrupt
+
+
+def _stop_on_sigterm() -> None:
+    """Treat SIGTERM like Ctrl-C, so a terminated demo still stops its simulator."""
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, _raise_interrupt)
+
+
+def serve(app: GcsApp, *, host: str, port: int, gamepad: Path | None, no_gamepad: bool,
+          alive: Callable[[], bool] = lambda: True) -> int:
+    """Run ``app`` with its page (and gamepad) until Ctrl-C or ``alive()`` turns False."""
+    ui = WebUi(app, host=host, port=port)
+    pad: Gamepad | None = None
+    try:
+        app.start()
+        ui.start()
+        if not no_gamepad:
+            pad = _start_gamepad(app, gamepad,
+                                 may_steer=lambda: not ui.browser_holds_control())
+        _say(f"GCS page: {ui.url}  (Ctrl-C to stop)")
+        while alive():
+            time.sleep(0.5)
+        _say("stopped: the simulator exited")
+        return 1
+    except KeyboardInterrupt:
+        _say("stopping…")
+        return 0
+    finally:
+        ui.close()
+        if pad is not None:
+            pad.close()
+
+
+def run_demo(config: str, *, host: str, port: int, gamepad: Path | None,
+             no_gamepad: bool) -> int:
+    """Simulated team at real speed + GCS + page; blocks until stopped.
+
+    The GCS runs on the wall clock, as ``gcs run`` does with real vehicles: its
+    setpoints then keep their schedule even when the sim's clock samples queue
+    up behind a busy machine's telemetry (on the sim clock they did not, and the
+    vehicles went into hold).
+    """
+    _stop_on_sigterm()
+    team = load_team(config)
+    endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
+    _say(f"starting the simulated team of {team.source} on {endpoint}…")
+    with SimProcess(team.source, endpoint=endpoint, speed="1") as sim:
+        _say(sim.ready_line)
+        settings = ZenohSettings(mode="peer", connect=(endpoint,))
+        with GcsApp(team, zenoh_settings=settings) as app:
+            code = serve(app, host=host, port=port, gamepad=gamepad, no_gamepad=no_gamepad,
+                         alive=sim.alive)
+        if code:
+            print(" | ".join(sim.stderr_tail[-3:]), file=sys.stderr)
+        return code
+
+
+def run_gcs(config: str, *, host: str, port: int, record: Path | None,
+            gamepad: Path | None, no_gamepad: bool) -> int:
+    """GCS on the wall clock for the config's links + page; blocks until stopped."""
+    _stop_on_sigterm()
+    team = load_team(config)
+    with GcsApp(team, record=record) as app:
+        if record is not None:
+            _say(f"recording to {record}")
+        return serve(app, host=host, port=port, gamepad=gamepad, no_gamepad=no_gamepad)

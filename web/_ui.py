@@ -1,0 +1,257 @@
+"""The live page of one GCS: a viser server and the thread that draws it.
+
+The 4 Hz loop is never made to wait for the page: its listener only stores
+the latest snapshot. A separate UI thread draws the scene at ``rate_hz``
+(25 Hz by default) from the vehicles' latest telemetry and the simulator's
+truth, each frame inside ``server.atomic()``; the status and plots follow the
+loop's snapshots. The holder's sticks are written to the operator command
+from this thread too (refreshed while deflected, one zero on release), so the
+browser is one more input source beside the gamepad and scripts.
+
+Layout of the page: the 3-D scene in the middle, under a red ABORT button
+that no panel can hide (the page script's; it presses the abort command's
+hotkey, Ctrl+Shift+X); the control panel on the
+right has, per viewer, the control banner, ABORT, take/release control, the
+"Fly" folder (virtual sticks, scale, altitude, guidance, phase buttons) and
+"View"; a panel on the left, shared by all viewers, has the tabs "Status"
+(phase, command, vehicles and links, events) and "Plots" (distances and
+velocities over the last 60 s).
+"""
+
+from __future__ import annotations
+
+import collections
+import logging
+import socket
+import threading
+import time
+
+import numpy as np
+import viser
+
+from gcs.app import GcsApp
+from gcs.common import join_thread
+from gcs.loop import Action, RuntimeSnapshot
+from web._actions import OperatorActions
+from web._browser_script import ABORT_HOTKEY, ABORT_LABEL, ABORT_MODIFIER, install_script
+from web._control_lock import ControlLock
+from web._frame import TeamView, build_frame
+from web._history import History
+from web._panel import ControlPanel, abort_for
+from web._plots import PlotsView
+from web._quadmesh import quad_mesh
+from web._scene import SceneView
+from web._status import UiStats, events_html, summary_html, vehicles_html
+from web._trails import Trails
+
+__all__ = ["UI_RATE_HZ", "WebUi", "page_url"]
+
+_log = logging.getLogger(__name__)
+
+UI_RATE_HZ = 25.0
+"""Scene frames per second of the UI thread (the issue asks at least 20)."""
+
+
+def page_url(host: str, server: viser.ViserServer) -> str:
+    """Where a browser reaches ``server`` served on ``host`` (the machine's name for any)."""
+    name = socket.gethostname() if host in ("0.0.0.0", "::") else host
+    return f"http://{name}:{server.get_port()}"
+
+
+class WebUi:
+    """Serve the page of ``app`` and draw it; ``start()`` then ``close()``.
+
+    Args:
+        app: the GCS (runtime, operator, clock, team, sim truth).
+        host: interface to serve on; 127.0.0.1 unless another is asked for.
+        port: TCP port of the page (and its websocket).
+        rate_hz: scene frames per second.
+    """
+
+    def __init__(self, app: GcsApp, *, host: str = "127.0.0.1", port: int = 8080,
+                 rate_hz: float = UI_RATE_HZ) -> None:
+        self._app = app
+        runtime = app.loop
+        cfg = app.team.config
+        self._view = TeamView.from_team(app.team, runtime.analysis)
+        self._period = 1.0 / rate_hz
+        self.host = host
+        self.server = viser.ViserServer(host=host, port=port, label=f"GCS {cfg.name}",
+                                        verbose=False)
+        server = self.server
+        server.gui.configure_theme(control_width="large", show_share_button=False)
+        server.gui.main_panel.dock_right()
+        abort = server.gui.add_command(ABORT_LABEL, hotkey=ABORT_HOTKEY, modifier=ABORT_MODIFIER,
+                                       icon=viser.Icon.ALERT_OCTAGON,
+                                       description="any viewer: the team stops, holds, lands")
+        abort.on_trigger(self._on_abort)
+        install_script(server)
+        self._scene = SceneView(server.scene, self._view,
+                                quad_mesh(cfg.airframe.arm_x, cfg.airframe.arm_y),
+                                geofence_xy=cfg.safety.geofence_xy)
+        # behind the team (south, its forward is north) and above: forward is away
+        server.initial_camera.position = (-3.4, -1.0, -2.4)
+        server.initial_camera.look_at = (0.0, 0.0, 0.0)
+        labels = tuple(app.team.formation.label(k) for k in range(app.team.formation.m))
+        # shared status and plots in their own panel on the left, so the controls
+        # on the right keep the whole height (ABORT at their top)
+        info = server.gui.add_panel()
+        info.dock_left()
+        info.set_width(470)
+        with info.add_tab("Status", viser.Icon.LIST_DETAILS):
+            self._summary = server.gui.add_html(summary_html(None, loop=None, control="",
+                                                             ui=None))
+            self._vehicles = server.gui.add_html("")
+            self._events = server.gui.add_html(events_html(None))
+        with info.add_tab("Plots", viser.Icon.CHART_LINE):
+            self._plots = PlotsView(server.gui, self._view, labels)
+        self._history = History(self._view)
+        self._trails = Trails(self._view.n)
+        self._lock = ControlLock()
+        self._actions = OperatorActions(runtime, app.operator, app.clock)
+        self._panels: dict[int, ControlPanel] = {}
+        self._panels_lock = threading.Lock()
+        self._snapshot: RuntimeSnapshot | None = None
+        self._shown: RuntimeSnapshot | None = None
+        self._sticks_active = False
+        self._last_error = ""
+        self._frame_times: collections.deque[float] = collections.deque(maxlen=100)
+        self._frame_costs: collections.deque[float] = collections.deque(maxlen=100)
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True, name="web-ui")
+        server.on_client_connect(self._on_connect)
+        server.on_client_disconnect(self._on_disconnect)
+        app.add_listener(self._on_tick)
+
+    # -- public --------------------------------------------------------------------------
+
+    @property
+    def url(self) -> str:
+        """Where to point a browser."""
+        return page_url(self.host, self.server)
+
+    def browser_holds_control(self) -> bool:
+        """True while a viewer holds control (then the gamepad may not steer)."""
+        return self._lock.holder is not None
+
+    def start(self) -> None:
+        """Start drawing (the server is already serving)."""
+        self._thread.start()
+
+    def stats(self) -> UiStats:
+        """Achieved frame rate and the server-side cost of a frame (build and draw)."""
+        times = list(self._frame_times)
+        rate = (len(times) - 1) / (times[-1] - times[0]) if len(times) > 2 else 0.0
+        costs = np.array(self._frame_costs) if self._frame_costs else np.zeros(1)
+        return UiStats(rate_hz=rate, draw_ms=1e3 * float(np.median(costs)),
+                       draw_p99_ms=1e3 * float(np.percentile(costs, 99)))
+
+    def close(self) -> None:
+        """Stop drawing and serving; idempotent."""
+        self._stop.set()
+        join_thread(self._thread, 2.0, what="the page's drawing loop")
+        self.server.stop()
+
+    # -- viewers -------------------------------------------------------------------------
+
+    def _on_connect(self, client: viser.ClientHandle) -> None:
+        panel = ControlPanel(client, self._actions, self._lock,
+                             on_control_change=self._refresh_panels)
+        with self._panels_lock:
+            self._panels[client.client_id] = panel
+        panel.refresh()
+
+    def _on_disconnect(self, client: viser.ClientHandle) -> None:
+        with self._panels_lock:
+            panel = self._panels.pop(client.client_id, None)
+        if panel is not None and panel.close():
+            self._refresh_panels()
+
+    def _on_abort(self, event: viser.CommandEvent) -> None:
+        """The abort command (the overlay button, the hotkey): as the viewer's panel's."""
+        with self._panels_lock:
+            panel = self._panels.get(event.client_id) if event.client_id is not None else None
+        if panel is not None:
+            panel.abort()
+        elif event.client is not None:  # a viewer whose panel is not built yet still aborts
+            abort_for(event.client, self._actions)
+        else:
+            self._actions.request(Action.ABORT)
+
+    def _refresh_panels(self) -> None:
+        for panel in self._panel_list():
+            panel.refresh()
+
+    def _panel_list(self) -> list[ControlPanel]:
+        with self._panels_lock:
+            return list(self._panels.values())
+
+    def _control_text(self) -> str:
+        holder = self._lock.holder
+        return "nobody (view only)" if holder is None else f"viewer #{holder}"
+
+    # -- drawing -------------------------------------------------------------------------
+
+    def _on_tick(self, snap: RuntimeSnapshot, _truth: object) -> None:
+        """The loop's listener: store, nothing else (the loop must never wait for the page)."""
+        self._snapshot = snap
+
+    def _run(self) -> None:
+        due = time.monotonic()
+        while not self._stop.wait(max(0.0, due - time.monotonic())):
+            now = time.monotonic()
+            due = max(due + self._period, now - self._period)  # never burst to catch up
+            try:
+                self._frame()
+            except Exception as exc:  # a bad frame must not end the page
+                text = f"{type(exc).__name__}: {exc}"
+                if text != self._last_error:  # once per distinct fault, not 25 times a second
+                    self._last_error = text
+                    _log.exception("UI frame failed")
+            self._frame_times.append(now)
+
+    def _frame(self) -> None:
+        app = self._app
+        started = time.perf_counter()
+        fleet = app.loop.fleet_table.read(app.clock.now())
+        snap = self._snapshot
+        self._trails.add(fleet.t, fleet.p_ned)
+        frame = build_frame(self._view, fleet, scale=snap.operator.demand.scale if snap else 1.0,
+                            truth=app.truth, trails=self._trails,
+                            accel_cmd=snap.accel_cmd if snap else None)
+        with self.server.atomic():
+            self._scene.draw(frame)
+        self._frame_costs.append(time.perf_counter() - started)
+        panels = self._panel_list()
+        self._write_sticks(panels)
+        for panel in panels:
+            panel.follow_camera(frame.centroid)
+        if snap is not None and snap is not self._shown:
+            self._shown = snap
+            self._show_tick(snap, panels)
+
+    def _write_sticks(self, panels: list[ControlPanel]) -> None:
+        holder = self._lock.holder
+        panel = next((p for p in panels if p.id == holder), None)
+        if panel is None:
+            self._sticks_active = False
+            return
+        sticks = panel.sticks()
+        if any(sticks) or self._sticks_active:
+            self._actions.set_sticks(*sticks, source=panel.source)
+        self._sticks_active = any(sticks)
+
+    def _show_tick(self, snap: RuntimeSnapshot, panels: list[ControlPanel]) -> None:
+        app = self._app
+        health = {vid: app.loop.profiles[vid].link.health for vid in self._view.ids}
+        with self.server.atomic():
+            self._summary.content = summary_html(snap, loop=app.loop.stats(),
+                                                 control=self._control_text(), ui=self.stats())
+            self._vehicles.content = vehicles_html(
+                snap, health=health, truth=snap.truth, mass=app.team.config.airframe.mass,
+                stale_after=self._view.stale_after)
+            self._events.content = events_html(snap)
+            if self._history.add(snap):
+                self._plots.update(self._history)
+        for panel in panels:
+            panel.sync(snap.operator)
