@@ -61,7 +61,7 @@ _TARGET_P99_MS = 1.0
 
 _ECHO = """
 import sys
-from gcs.link import ZenohSettings, open_session
+from gcs.transport import ZenohSettings, open_session
 session = open_session(ZenohSettings(listen=(sys.argv[1],), connect=()))
 pong = session.declare_publisher("bench/pong", express=True)
 ping = session.declare_subscriber("bench/ping", lambda s: pong.put(s.payload.to_bytes()))
@@ -135,12 +135,15 @@ def _round_trips(link: Link, ping: zenoh.Publisher, pongs: _Pongs,
 
 def _start(args: list[str], ready_prefix: str, what: str) -> tuple[subprocess.Popen[str], str]:
     proc = subprocess.Popen(args, cwd=_ROOT, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                            stderr=subprocess.DEVNULL, text=True)
-    assert proc.stdout is not None
+                            stderr=subprocess.PIPE, text=True)
+    assert proc.stdout is not None and proc.stderr is not None
     line = proc.stdout.readline().strip()
     if not line.startswith(ready_prefix):
         proc.kill()
-        raise RuntimeError(f"{what} did not start (exit {proc.poll()})")
+        said = proc.stderr.read().strip().splitlines()
+        raise RuntimeError(f"{what} did not start (exit {proc.wait()}): "
+                           f"{said[-1] if said else 'nothing on stderr'}")
+    threading.Thread(target=proc.stderr.read, daemon=True).start()  # a full pipe must not block it
     return proc, line
 
 
