@@ -6,17 +6,23 @@ from pathlib import Path
 
 from gcs.common import kernel_sources, refresh_numba_cache
 
+ROOT = Path(__file__).resolve().parents[1]
+TREES = [ROOT / "gcs", ROOT / "vehicles", ROOT / "sim"]
+
 
 def _tree(tmp_path: Path) -> Path:
     root = tmp_path / "pkgx"
     (root / "sub").mkdir(parents=True)
     (root / "__init__.py").write_text('"""A tree."""\n')
-    (root / "sub" / "__init__.py").write_text('"""A subpackage."""\n')
-    (root / "sub" / "_helper.py").write_text("GAIN = 2.0\n")
-    (root / "sub" / "_unused.py").write_text("OTHER = 1.0\n")
+    (root / "sub" / "__init__.py").write_text(
+        '"""A subpackage re-exporting its modules."""\n\n'
+        "from pkgx.sub._gain import GAIN\nfrom pkgx.sub._other import OTHER\n")
+    (root / "sub" / "_gain.py").write_text("GAIN = 2.0\n")
+    (root / "sub" / "_other.py").write_text("OTHER = 1.0\n")
+    (root / "_helper.py").write_text("from pkgx.sub import GAIN\n\nSCALE = GAIN\n")
     (root / "_kernels.py").write_text(
-        "from gcs.common import kernel\nfrom pkgx.sub import _helper\n\n"
-        "@kernel()\ndef double(x):\n    return _helper.GAIN * x\n")
+        "from gcs.common import kernel\nfrom pkgx import _helper\n\n"
+        "@kernel()\ndef double(x):\n    return _helper.SCALE * x\n")
     (root / "host.py").write_text("from pkgx import _kernels\n")  # imports a kernel, is none
     return root
 
@@ -31,10 +37,10 @@ def _stale_files(root: Path) -> list[Path]:
     return files
 
 
-def test_kernel_sources_follow_imports_across_subpackages(tmp_path: Path) -> None:
+def test_kernel_sources_follow_imports_to_the_defining_module(tmp_path: Path) -> None:
     root = _tree(tmp_path)
-    names = [p.relative_to(tmp_path).as_posix() for p in kernel_sources([root])]
-    assert names == ["pkgx/_kernels.py", "pkgx/sub/__init__.py", "pkgx/sub/_helper.py"]
+    names = [p.relative_to(tmp_path).as_posix() for p in kernel_sources(root, [root])]
+    assert names == ["pkgx/_helper.py", "pkgx/_kernels.py", "pkgx/sub/_gain.py"]
 
 
 def test_a_changed_source_drops_the_cache_of_the_whole_tree(tmp_path: Path) -> None:
@@ -44,9 +50,25 @@ def test_a_changed_source_drops_the_cache_of_the_whole_tree(tmp_path: Path) -> N
     refresh_numba_cache(root, [root])
     assert all(f.exists() for f in files)  # nothing changed: the cache stays
     (root / "host.py").write_text("# edited, no kernel reaches it\n")
-    (root / "sub" / "_unused.py").write_text("OTHER = 3.0\n")
+    (root / "sub" / "_other.py").write_text("OTHER = 3.0\n")  # re-exported beside GAIN
     refresh_numba_cache(root, [root])
     assert all(f.exists() for f in files)
-    (root / "sub" / "_helper.py").write_text("GAIN = 3.0\n")  # a kernel's constant
+    (root / "sub" / "_gain.py").write_text("GAIN = 3.0\n")  # a constant a kernel bakes in
     refresh_numba_cache(root, [root])
     assert not any(f.exists() for f in files)
+
+
+def test_the_project_trees_fingerprint_what_their_kernels_compile_in() -> None:
+    """The autopilot's kernels bake in the wire's mode and setpoint numbers; the sim's inline
+    the autopilot's. A module imported by a kernel's module counts even when no kernel uses
+    it (the fleet table's profile types); a package's other modules do not."""
+    def sources(tree: str) -> set[str]:
+        return {p.relative_to(ROOT).as_posix() for p in kernel_sources(ROOT / tree, TREES)}
+
+    vehicles, sim, gcs = sources("vehicles"), sources("sim"), sources("gcs")
+    wire = {"gcs/wire/_modes.py", "gcs/wire/_setpoints.py"}
+    assert wire <= vehicles and wire <= sim
+    assert "vehicles/_indi.py" in sim and "vehicles/_kernel.py" in sim
+    assert "gcs/guidance/_udi.py" in gcs and "gcs/wire/_stamp.py" in gcs
+    assert not [p for p in vehicles | sim if p.startswith(("gcs/link/", "gcs/loop/"))]
+    assert "gcs/link/_manager.py" not in gcs and "gcs/loop/_runtime.py" not in gcs

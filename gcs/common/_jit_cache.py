@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import ast
 import hashlib
+import importlib.util
 import re
 import threading
 from collections.abc import Callable, Sequence
@@ -30,25 +31,67 @@ from numba.core.caching import FunctionCache
 __all__ = ["kernel", "kernel_sources", "refresh_numba_cache"]
 
 _STAMP = "numba-sources.sha256"
-_KERNEL = re.compile(r"^@kernel\b", re.MULTILINE)
-_ROOT = Path(__file__).resolve().parents[2]
+_KERNEL = re.compile(r"^\s*@(?:\w+\.)*kernel\(", re.MULTILINE)
 
-#: Which trees' sources key each tree's cache: the sim's kernels inline the autopilot's.
-_SOURCES = {"gcs": ("gcs",), "vehicles": ("vehicles",), "sim": ("sim", "vehicles")}
+#: The project's package trees: a kernel may compile in constants and functions from any.
+_TREES = ("gcs", "vehicles", "sim")
 
 _checked: set[str] = set()
 _lock = threading.Lock()
 
 
-def kernel_sources(source_dirs: Sequence[Path]) -> list[Path]:
-    """Modules under ``source_dirs`` (package trees) that compiled kernels depend on."""
+def _module_files(roots: Sequence[Path]) -> dict[str, Path]:
+    """Dotted module name -> file, for every module under the package trees ``roots``."""
     modules: dict[str, Path] = {}
-    for d in source_dirs:
+    for d in roots:
         for p in d.rglob("*.py"):
             parts = p.relative_to(d.parent).with_suffix("").parts
             modules[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = p
+    return modules
+
+
+def _reexports(init: Path) -> dict[str, str]:
+    """Name -> defining module, for the names a package's ``__init__`` imports."""
+    found: dict[str, str] = {}
+    for node in ast.parse(init.read_text("utf-8")).body:
+        if isinstance(node, ast.ImportFrom) and node.module and not node.level:
+            for alias in node.names:
+                found[alias.asname or alias.name] = node.module
+    return found
+
+
+def _imported(node: ast.ImportFrom, modules: dict[str, Path]) -> list[str]:
+    """The project modules a ``from M import a, b`` reads: each name's defining module.
+
+    A name a package re-exports leads to the module defining it, not to the
+    whole package, so one re-exported constant does not tie a kernel to every
+    module of that package.
+    """
+    base = node.module or ""
+    if base not in modules:
+        return []
+    if modules[base].name != "__init__.py":
+        return [base]
+    exports = _reexports(modules[base])
+    out = []
+    for alias in node.names:
+        sub = f"{base}.{alias.name}"
+        if sub in modules:
+            out.append(sub)
+        elif exports.get(alias.name) in modules:
+            out.append(exports[alias.name])
+        else:
+            out.append(base)
+    return out
+
+
+def kernel_sources(tree: Path, roots: Sequence[Path]) -> list[Path]:
+    """Modules a kernel of ``tree`` may be compiled from: every module of the tree with a
+    ``@kernel`` and everything those import, followed into all the package trees ``roots``.
+    """
+    modules = _module_files([tree, *roots])
     pending = [name for name, path in modules.items()
-               if _KERNEL.search(path.read_text("utf-8"))]
+               if path.is_relative_to(tree) and _KERNEL.search(path.read_text("utf-8"))]
     needed: set[str] = set()
     while pending:
         name = pending.pop()
@@ -56,35 +99,33 @@ def kernel_sources(source_dirs: Sequence[Path]) -> list[Path]:
             continue
         needed.add(name)
         for node in ast.walk(ast.parse(modules[name].read_text("utf-8"))):
-            if isinstance(node, ast.ImportFrom) and node.module in modules:
-                pending.append(node.module)
-                pending.extend(f"{node.module}.{a.name}" for a in node.names
-                               if f"{node.module}.{a.name}" in modules)
+            if isinstance(node, ast.ImportFrom) and not node.level:
+                pending.extend(_imported(node, modules))
             elif isinstance(node, ast.Import):
                 pending.extend(alias.name for alias in node.names if alias.name in modules)
     return sorted(modules[name] for name in needed)
 
 
-def refresh_numba_cache(package_dir: Path, source_dirs: Sequence[Path]) -> None:
-    """Drop the numba cache under ``package_dir`` if a kernel source in ``source_dirs`` changed.
+def refresh_numba_cache(tree: Path, roots: Sequence[Path]) -> None:
+    """Drop the numba cache under ``tree`` if a source its kernels are built from changed.
 
     The cache files of every ``__pycache__`` in the tree go; the fingerprint is
     kept in the tree's top ``__pycache__``. Unwritable cache directories (numba
     then caches elsewhere) are left alone.
     """
     digest = hashlib.sha256()
-    for path in kernel_sources(source_dirs):
+    for path in kernel_sources(tree, roots):
         digest.update(f"{path.relative_to(path.parents[1])}\0".encode())
         digest.update(path.read_bytes())
     fingerprint = digest.hexdigest()
-    stamp = package_dir / "__pycache__" / _STAMP
+    stamp = tree / "__pycache__" / _STAMP
     try:
         if stamp.read_text(encoding="ascii") == fingerprint:
             return
     except OSError:
         pass
     try:
-        for cache in package_dir.rglob("__pycache__"):
+        for cache in tree.rglob("__pycache__"):
             for stale in [*cache.glob("*.nbi"), *cache.glob("*.nbc")]:
                 stale.unlink(missing_ok=True)
         stamp.parent.mkdir(exist_ok=True)
@@ -93,34 +134,58 @@ def refresh_numba_cache(package_dir: Path, source_dirs: Sequence[Path]) -> None:
         return
 
 
+def _tree_dir(name: str) -> Path | None:
+    """Where the package tree ``name`` is installed (found, not imported)."""
+    spec = importlib.util.find_spec(name)
+    return Path(spec.origin).parent if spec is not None and spec.origin else None
+
+
 def _check_tree(module: str) -> None:
     """Refresh the cache of ``module``'s tree, once per process."""
     tree = module.partition(".")[0]
     with _lock:
-        if tree in _checked or tree not in _SOURCES:
+        if tree in _checked or tree not in _TREES:
             return
         _checked.add(tree)
-        refresh_numba_cache(_ROOT / tree, [_ROOT / d for d in _SOURCES[tree]])
+        roots = [d for d in map(_tree_dir, _TREES) if d is not None]
+        here = _tree_dir(tree)
+        if here is not None:
+            refresh_numba_cache(here, roots)
 
 
-class _CheckedCache(FunctionCache):
-    """numba's per-function disk cache, checked against the sources before its first use."""
+class _CheckedCache:
+    """numba's per-function disk cache, made at first use, after its tree's check.
+
+    numba makes a dispatcher's cache when the function is decorated, which
+    probes the cache directory; this one waits for the first build.
+    """
 
     def __init__(self, py_func: Callable[..., Any]) -> None:
-        self._module = py_func.__module__
-        super().__init__(py_func)
+        self._py_func = py_func
+        self._cache: FunctionCache | None = None
+
+    def _real(self) -> FunctionCache:
+        if self._cache is None:
+            _check_tree(self._py_func.__module__)
+            self._cache = FunctionCache(self._py_func)
+        return self._cache
 
     def load_overload(self, sig: Any, target_context: Any) -> Any:
-        _check_tree(self._module)
-        return super().load_overload(sig, target_context)
+        return self._real().load_overload(sig, target_context)
+
+    def save_overload(self, sig: Any, data: Any) -> None:
+        self._real().save_overload(sig, data)
+
+    def __getattr__(self, name: str) -> Any:  # cache_path, enable, disable, flush
+        return getattr(self._real(), name)
 
 
 def kernel(*, nogil: bool = False) -> Callable[[Callable[..., Any]], Any]:
     """``numba.njit(cache=True)`` whose cache is checked against its sources at first build."""
 
     def build(fn: Callable[..., Any]) -> Any:
-        dispatcher: Any = njit(cache=True, nogil=nogil)(fn)
-        dispatcher._cache = _CheckedCache(fn)  # what enable_caching() sets, checked first
+        dispatcher: Any = njit(nogil=nogil)(fn)
+        dispatcher._cache = _CheckedCache(fn)  # what njit(cache=True) sets, made lazily
         return dispatcher
 
     return build
