@@ -45,9 +45,9 @@ from pathlib import Path
 import numpy as np
 import viser
 
+from gcs.analysis import analyze
 from gcs.app import GcsApp, free_tcp_port
 from gcs.config import Team, load_team
-from gcs.guidance import analyze
 from gcs.loop import FleetState, FleetTable
 from gcs.transport import ZenohSettings
 from gcs.wire import SimTruth

@@ -21,9 +21,10 @@ import math
 
 import numpy as np
 
+from gcs.analysis import analyze
 from gcs.common import shipped_config
 from gcs.config import load_team
-from gcs.guidance import Guidance, MotionDemand, analyze
+from gcs.guidance import Guidance, MotionDemand
 
 
 def main(argv: list[str] | None = None) -> int:

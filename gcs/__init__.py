@@ -9,7 +9,8 @@ The subpackages, lowest layer first (each imports only those before it):
 ``gcs.transport``   moving frames: zenoh sessions and transports, pymavlink connections
 ``gcs.formation``   the formation's graph, rigidity and motion synthesis
 ``gcs.config``      a team file, validated: shape, gains, limits, payload, links
-``gcs.guidance``    the guidance law (eq. udi) and the worst-case analysis
+``gcs.guidance``    the guidance law (eq. udi)
+``gcs.analysis``    the worst-case analysis of a team (``gcs analyze``)
 ``gcs.link``        one MAVLink link per vehicle, autopilot profiles, discovery
 ``gcs.loop``        the 4 Hz loop: fleet table, safety rules, operator, phases, runtime
 ``gcs.flightlog``   the recorder, log index and decoding, flight metrics, reports
@@ -25,8 +26,8 @@ from __future__ import annotations
 import importlib
 from types import ModuleType
 
-__all__ = ["app", "cli", "common", "config", "flightlog", "formation", "guidance", "link",
-           "loop", "transport", "wire"]
+__all__ = ["analysis", "app", "cli", "common", "config", "flightlog", "formation", "guidance",
+           "link", "loop", "transport", "wire"]
 
 
 def __getattr__(name: str) -> ModuleType:

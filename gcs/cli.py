@@ -21,8 +21,8 @@ __all__ = ["main"]
 
 
 def _cmd_analyze(args: argparse.Namespace) -> int:
+    from gcs.analysis import analysis_json, analyze, format_report
     from gcs.config import load_team
-    from gcs.guidance import analysis_json, analyze, format_report
 
     team = load_team(args.config)
     result = analyze(team)

@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 import yaml
 
+from gcs.analysis import analyze, rope_pull
 from gcs.config import load_team
-from gcs.guidance import analyze, rope_pull
 from tests.conftest import run_gcs
 
 SQUARE = "configs/bebop_square.yaml"

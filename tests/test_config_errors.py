@@ -9,8 +9,8 @@ from typing import Any
 import pytest
 import yaml
 
+from gcs.analysis import analyze
 from gcs.config import ConfigError, load_team
-from gcs.guidance import analyze
 from gcs.loop import load_gamepad_config
 from tests.conftest import run_gcs
 from vehicles import BEBOP2, load_airframe

@@ -17,9 +17,9 @@ from pathlib import Path
 
 import pytest
 
+from gcs.analysis import analyze
 from gcs.common import shipped_config
 from gcs.config import load_team
-from gcs.guidance import analyze
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"

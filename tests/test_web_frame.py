@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from gcs.analysis import analyze
 from gcs.config import load_team
-from gcs.guidance import analyze
 from gcs.loop import FleetState
 from gcs.wire import SimTruth
 from tests.colours import hue_apart, hue_saturation_value

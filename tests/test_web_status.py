@@ -10,8 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from gcs.analysis import analyze
 from gcs.config import load_team
-from gcs.guidance import MotionDemand, analyze
+from gcs.guidance import MotionDemand
 from gcs.link import LinkHealth
 from gcs.loop import (
     Event,

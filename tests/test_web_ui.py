@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 import viser
 
+from gcs.analysis import analyze
 from gcs.app import GcsApp, SimProcess, free_tcp_port
 from gcs.config import load_team
-from gcs.guidance import analyze
 from gcs.loop import FleetState, OperatorCommand
 from gcs.transport import ZenohSettings
 from gcs.wire import SimTruth

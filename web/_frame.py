@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gcs.analysis import Analysis
 from gcs.config import Team
-from gcs.guidance import Analysis
 from gcs.loop import FleetState
 from gcs.wire import SimTruth
 from web import palette

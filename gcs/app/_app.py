@@ -20,10 +20,10 @@ from pathlib import Path
 
 import zenoh
 
+from gcs.analysis import Analysis, analyze
 from gcs.common import join_thread
 from gcs.config import GuidanceConfig, Team
 from gcs.flightlog import TlogRecorder
-from gcs.guidance import Analysis, analyze
 from gcs.link import Link, LinkManager, Presence, PresenceEvent
 from gcs.loop import (
     HOLD_CAP_S,

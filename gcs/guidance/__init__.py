@@ -1,30 +1,16 @@
-"""The guidance law (eq. udi) and the worst-case analysis of a team.
+"""The guidance law (eq. udi of the paper), per vehicle, from relative data.
 
 :class:`Guidance` turns relative positions, own velocities and a motion demand
-into one acceleration per vehicle (the compiled arithmetic is in ``_udi``);
-:func:`analyze` is the paper's force and worst-case analysis (``gcs analyze``).
+into one acceleration per vehicle; the compiled arithmetic is in ``_udi``.
 
 Modules:
 
-    ``_analysis``  Force and worst-case analysis of a team (paper, section "Force and worst
-                   case").
-    ``_law``       Formation-motion guidance: eq. udi of the paper, per vehicle, from
-                   relative data.
-    ``_udi``       The guidance's per-vehicle arithmetic, compiled: eq. udi and its local
-                   frames as loops.
+    ``_law``  Formation-motion guidance: eq. udi of the paper, per vehicle, from relative
+              data.
+    ``_udi``  The guidance's per-vehicle arithmetic, compiled: eq. udi and its local frames
+              as loops.
 """
 
-from gcs.guidance._analysis import (
-    GAIN_FIELDS,
-    Analysis,
-    Violation,
-    a_safe_span,
-    analysis_json,
-    analyze,
-    format_report,
-    gain_violation,
-    rope_pull,
-)
 from gcs.guidance._law import (
     Guidance,
     MotionDemand,
@@ -36,22 +22,13 @@ from gcs.guidance._law import (
 from gcs.guidance._udi import finite_max_norm, local_frames, to_ned_saturated, udi
 
 __all__ = [
-    "GAIN_FIELDS",
-    "Analysis",
     "Guidance",
     "MotionDemand",
     "RelativeMeasurements",
-    "Violation",
-    "a_safe_span",
-    "analysis_json",
-    "analyze",
     "finite_max_norm",
-    "format_report",
     "formation_acceleration",
-    "gain_violation",
     "local_frames",
     "relative_measurements",
-    "rope_pull",
     "saturate",
     "to_ned_saturated",
     "udi",

@@ -37,8 +37,9 @@ from typing import Protocol
 
 import numpy as np
 
+from gcs.analysis import Analysis, a_safe_span, analyze
 from gcs.config import Team
-from gcs.guidance import Analysis, Guidance, MotionDemand, a_safe_span, analyze, finite_max_norm
+from gcs.guidance import Guidance, MotionDemand, finite_max_norm
 from gcs.link import AutopilotProfile, Fanout, LinkError
 from gcs.loop._clock import Clock, ClockStoppedError
 from gcs.loop._fleet import FleetState, FleetTable
