@@ -9,7 +9,6 @@ whole batch of vehicles and signals lives in one preallocated array.
 from __future__ import annotations
 
 import numpy as np
-from scipy.signal import butter
 
 from gcs.common import kernel
 
@@ -21,6 +20,8 @@ def butterworth2(cutoff_hz: float, sample_rate_hz: float) -> np.ndarray:
     if not 0.0 < cutoff_hz < 0.5 * sample_rate_hz:
         raise ValueError(f"cutoff {cutoff_hz} Hz must lie between 0 and the Nyquist frequency "
                          f"{0.5 * sample_rate_hz} Hz")
+    from scipy.signal import butter  # here, not at import: scipy.signal takes about 1 s to load
+
     b, a = butter(2, cutoff_hz, btype="low", fs=sample_rate_hz)
     return np.array([b[0], b[1], b[2], a[1], a[2]], dtype=np.float64)
 
