@@ -56,8 +56,7 @@ from gcs.config import load_team
 from gcs.loop import Phase
 from gcs.transport import ZenohSettings, open_session
 from gcs.wire import MavlinkEncoder, keys
-from sim import BackgroundStepping
-from sim._host import LIFT_LAG_S
+from sim import LIFT_LAG_S, BackgroundStepping
 
 ROOT = Path(__file__).resolve().parents[1]
 _TELEMETRY_PERIOD_S = 0.05

@@ -9,7 +9,7 @@ decoding on both sides, the host's checks and its autopilot call; the host
 keeps running its physics at real-time speed (4 vehicles, full telemetry)
 meanwhile. The setpoints go to a disarmed vehicle, which accepts and echoes
 them without flying. This process gives receive threads the GIL within
-0.1 ms, as the GCS process does (``gcs.app._app.LOOP_GIL_SWITCH_S``).
+0.1 ms, as the GCS process does (``gcs.app.LOOP_GIL_SWITCH_S``).
 
 For scale on a shared machine it measures the floor at the same moments:
 each setpoint round trip is followed by a bare zenoh round trip between this
@@ -44,7 +44,7 @@ from pathlib import Path
 import numpy as np
 import zenoh
 
-from gcs.app._app import LOOP_GIL_SWITCH_S
+from gcs.app import LOOP_GIL_SWITCH_S
 from gcs.link import Link
 from gcs.transport import ZenohSettings, ZenohTransport, open_session
 from gcs.wire import MavMessage

@@ -5,8 +5,8 @@ memory. This bench records one real headless flight (``gcs fly``, the paper's
 scenario on the square, every MAVLink frame plus the guidance internals and
 sim truth) or takes ``--source``, then tiles it end to end, timestamps
 shifted, into a log of ``--hours`` of flight, and opens that in a fresh
-process the way ``gcs report`` does: the index (:class:`gcs.flightlog._reader.TlogIndex`),
-then the whole :class:`gcs.flightlog._flight.FlightLog`, then the report's figures
+process the way ``gcs report`` does: the index (:class:`gcs.flightlog.TlogIndex`),
+then the whole :class:`gcs.flightlog.FlightLog`, then the report's figures
 and summary. The child first opens the source flight, so its peak memory
 before the long log (imports, compiled kernels loaded) is the baseline; the
 long log's pages are memory-mapped and counted in the peak as they are read,
@@ -40,9 +40,7 @@ _ROOT = Path(__file__).resolve().parent.parent
 _CHILD = """
 import json, resource, sys, time
 from pathlib import Path
-from gcs.flightlog._flight import FlightLog
-from gcs.flightlog._reader import TlogIndex
-from gcs.flightlog._report import write_report
+from gcs.flightlog import FlightLog, TlogIndex, write_report
 
 def peak_mb():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024

@@ -8,7 +8,7 @@ Two measurements per team size, each with one real websocket viewer attached
 (``web.wireviewer.WireViewer``):
 
 * **frame cost** (server side): a real viser server and the page's scene
-  (``web._scene.SceneView``), the team moving every frame (positions,
+  (``web.SceneView``), the team moving every frame (positions,
   headings, velocities, rope tensions all change: the worst case for viser's
   send-only-what-changed), frames back to back. Reported: building the
   frame's arrays and handing them to viser (median and p99, ms) and the
@@ -16,7 +16,7 @@ Two measurements per team size, each with one real websocket viewer attached
   own thread). The viewer here reads and discards (``decode=False``): it
   shares the measured process, and decoding there would be counted in the
   CPU time and compete with the timed frames for the GIL.
-* **received rate**: the real page (``web._ui.WebUi``: scene, status and plots,
+* **received rate**: the real page (``web.WebUi``: scene, status and plots,
   the viewer's panel and camera follow) of a real ``GcsApp`` whose telemetry
   and simulator truth are a moving team fed into its fleet table (no
   simulator: 100 simulated vehicles would measure the simulator). The viewer

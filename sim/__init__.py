@@ -46,31 +46,10 @@ Modules:
 """
 
 from sim._backend import PhysicsBackend
-from sim._config import (
-    GroundConfig,
-    RopeConfig,
-    SensorConfig,
-    WindConfig,
-    WorldConfig,
-    load_world_config,
-)
-from sim._dynamics import physics_step
-from sim._fabric import CONTROL_TOPIC, TRUTH_TOPIC, HostFabric
-from sim._faults import ControlAction, ControlCommand, parse_control
-from sim._ground import contact_force
-from sim._host import CHUNK_S, CLOCK_REPUBLISH_S, TRUTH_PERIOD_S, SimHost, VehicleStatus
-from sim._inbox import ClockAck, ControlMessage, Event, Inbox, Received, Stop
+from sim._config import WorldConfig, load_world_config
+from sim._host import LIFT_LAG_S
 from sim._layout import Layout, paper_square, ring_layout
-from sim._options import HostOptions
-from sim._pacing import MAX_LAG_S, Pacer
-from sim._physics import run_lockstep, run_physics, samples_in
-from sim._priority import (
-    STAY_LIFTED_S,
-    WATCH_PERIOD_S,
-    BackgroundStepping,
-    can_lift,
-    set_background,
-)
+from sim._priority import BackgroundStepping
 from sim._ready_team import (
     DEFAULT_AIRFRAME,
     DEFAULT_AUTOPILOT_CONFIG,
@@ -78,72 +57,21 @@ from sim._ready_team import (
     build_team,
     take_off,
 )
-from sim._ropes import rope_tension
-from sim._sensors import sample_imu, sample_pose
-from sim._state import PhysicsParams, PhysicsState, make_physics_params, make_physics_state
-from sim._team_layout import team_layout
-from sim._udp import DEFAULT_BASE_PORT, DEFAULT_GCS_PORT, MAX_PEERS, UdpPorts
-from sim._wind import gust_step
 from sim._world import World
 
 __all__ = [
-    "CHUNK_S",
-    "CLOCK_REPUBLISH_S",
-    "CONTROL_TOPIC",
     "DEFAULT_AIRFRAME",
     "DEFAULT_AUTOPILOT_CONFIG",
-    "DEFAULT_BASE_PORT",
-    "DEFAULT_GCS_PORT",
     "DEFAULT_WORLD_CONFIG",
-    "MAX_LAG_S",
-    "MAX_PEERS",
-    "STAY_LIFTED_S",
-    "TRUTH_PERIOD_S",
-    "TRUTH_TOPIC",
-    "WATCH_PERIOD_S",
+    "LIFT_LAG_S",
     "BackgroundStepping",
-    "ClockAck",
-    "ControlAction",
-    "ControlCommand",
-    "ControlMessage",
-    "Event",
-    "GroundConfig",
-    "HostFabric",
-    "HostOptions",
-    "Inbox",
     "Layout",
-    "Pacer",
     "PhysicsBackend",
-    "PhysicsParams",
-    "PhysicsState",
-    "Received",
-    "RopeConfig",
-    "SensorConfig",
-    "SimHost",
-    "Stop",
-    "UdpPorts",
-    "VehicleStatus",
-    "WindConfig",
     "World",
     "WorldConfig",
     "build_team",
-    "can_lift",
-    "contact_force",
-    "gust_step",
     "load_world_config",
-    "make_physics_params",
-    "make_physics_state",
     "paper_square",
-    "parse_control",
-    "physics_step",
     "ring_layout",
-    "rope_tension",
-    "run_lockstep",
-    "run_physics",
-    "sample_imu",
-    "sample_pose",
-    "samples_in",
-    "set_background",
     "take_off",
-    "team_layout",
 ]

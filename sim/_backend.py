@@ -1,6 +1,6 @@
 """What a simulation host (the zenoh/MAVLink sim process) needs from a physics backend.
 
-:class:`sim._world.World` is the rigid-body implementation. Another backend
+:class:`sim.World` is the rigid-body implementation. Another backend
 (for example one that tracks commanded accelerations perfectly, to test the
 command path without physics) only has to provide these members.
 """
@@ -17,7 +17,7 @@ __all__ = ["PhysicsBackend"]
 
 
 class PhysicsBackend(Protocol):
-    """Steppable world whose vehicles are flown by an :class:`~vehicles._autopilot.Autopilot`."""
+    """Steppable world whose vehicles are flown by an :class:`~vehicles.Autopilot`."""
 
     @property
     def n_vehicles(self) -> int:

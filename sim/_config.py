@@ -1,7 +1,7 @@
 """World configuration: integration rate, ropes, payload drag, ground, wind, sensors.
 
 Loaded from configs/sim/default.yaml. What differs per run (airframe, start
-positions, rope lengths, payload mass) is passed to :class:`sim._world.World`
+positions, rope lengths, payload mass) is passed to :class:`sim.World`
 explicitly instead.
 """
 

@@ -12,7 +12,7 @@ key                                                dir    payload
 ``fleet/<f>/alive/<sysid>``                        token  liveliness, while the vehicle lives
 ``fleet/<f>/clock``                                out    sim time (:mod:`gcs.wire._clockwire`)
 ``fleet/<f>/clock/ack``                            in     lockstep ack (:mod:`gcs.wire._clockwire`)
-``fleet/<f>/sim/truth``                            out    :class:`gcs.wire._simtruth.SimTruth` JSON
+``fleet/<f>/sim/truth``                            out    :class:`gcs.wire.SimTruth` JSON
 ``fleet/<f>/sim/control``                          in     :mod:`sim._faults` JSON
 =================================================  =====  ======================================
 
@@ -81,7 +81,7 @@ class HostFabric:
 
         ``announce_sent`` (lockstep): every clock sample carries how many truth
         samples and how many payloads of each vehicle were published
-        (:func:`gcs.wire._clockwire.encode_clock`), and truth is never dropped.
+        (:func:`gcs.wire.encode_clock`), and truth is never dropped.
         """
         self._fleet = keys.check_fleet(fleet)
         self._sysids = tuple(sysids)

@@ -13,7 +13,7 @@ The loop, per chunk of :data:`CHUNK_S` of sim time:
    (a setpoint's echo has already left from the receive thread, see
    :meth:`vehicles.endpoint.VehicleEndpoint.take`);
 2. handle every event that arrived (frames, acks, control messages);
-3. step world and autopilots in lockstep (:meth:`sim._world.World.run`);
+3. step world and autopilots in lockstep (:meth:`sim.World.run`);
 4. let every endpoint send what is due, publish the clock, and the ground
    truth every :data:`TRUTH_PERIOD_S`.
 
@@ -40,7 +40,7 @@ from gcs.wire import SigningKey, SimTruth, load_signing_key, vec3
 from sim._config import WorldConfig
 from sim._fabric import HostFabric
 from sim._faults import ControlAction, parse_control
-from sim._inbox import ClockAck, ControlMessage, Event, Inbox, Received, Stop
+from sim._inbox import ClockAck, ControlMessage, Inbox, InboxItem, Received, Stop
 from sim._options import HostOptions
 from sim._pacing import Pacer
 from sim._priority import BackgroundStepping
@@ -50,7 +50,8 @@ from sim._udp import UdpPorts
 from vehicles import AutopilotConfig
 from vehicles.endpoint import VehicleEndpoint
 
-__all__ = ["CHUNK_S", "CLOCK_REPUBLISH_S", "TRUTH_PERIOD_S", "SimHost", "VehicleStatus"]
+__all__ = ["CHUNK_S", "CLOCK_REPUBLISH_S", "LIFT_LAG_S", "TRUTH_PERIOD_S", "SimHost",
+           "VehicleStatus"]
 
 _log = logging.getLogger(__name__)
 
@@ -259,7 +260,7 @@ class SimHost:
         while self._handle(self._inbox.get(0.0)):
             pass
 
-    def _handle(self, event: Event | None) -> bool:
+    def _handle(self, event: InboxItem | None) -> bool:
         """Act on one event; False if there was none."""
         if event is None:
             return False

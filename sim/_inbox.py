@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 from vehicles.endpoint import Inbound
 
-__all__ = ["ClockAck", "ControlMessage", "Event", "Inbox", "Received", "Stop"]
+__all__ = ["ClockAck", "ControlMessage", "Inbox", "InboxItem", "Received", "Stop"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -48,20 +48,20 @@ class Stop:
     """Leave the loop (SIGINT, SIGTERM)."""
 
 
-Event = Received | ClockAck | ControlMessage | Stop
+InboxItem = Received | ClockAck | ControlMessage | Stop
 
 
 class Inbox:
-    """Thread-safe FIFO of :data:`Event`; any thread puts, the host loop gets."""
+    """Thread-safe FIFO of :data:`InboxItem`; any thread puts, the host loop gets."""
 
     def __init__(self) -> None:
-        self._queue: queue.SimpleQueue[Event] = queue.SimpleQueue()
+        self._queue: queue.SimpleQueue[InboxItem] = queue.SimpleQueue()
 
-    def put(self, event: Event) -> None:
+    def put(self, event: InboxItem) -> None:
         """Add an event; never blocks (safe in signal handlers)."""
         self._queue.put(event)
 
-    def get(self, timeout_s: float) -> Event | None:
+    def get(self, timeout_s: float) -> InboxItem | None:
         """The next event, waiting at most ``timeout_s`` (0: do not wait); None if none came."""
         try:
             if timeout_s <= 0.0:

@@ -17,7 +17,7 @@ __all__ = ["Layout", "paper_square", "ring_layout"]
 
 
 class Layout(NamedTuple):
-    """Arrays :class:`sim._world.World` takes to place a team."""
+    """Arrays :class:`sim.World` takes to place a team."""
 
     p0_ned: np.ndarray
     """(N, 3) vehicle start positions, m."""

@@ -1,7 +1,7 @@
 """Simulated sensors: IMU (accelerometer, gyro) and motion-capture pose.
 
 Samples are the true signals plus white noise; the noise comes as standard
-normal draws made by :class:`sim._world.World` from its seeded generator, so the
+normal draws made by :class:`sim.World` from its seeded generator, so the
 kernel itself has no random state. The accelerometer measures specific force,
 so it feels the rope pull and reads about -g on z_body at rest.
 """

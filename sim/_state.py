@@ -32,7 +32,7 @@ class PhysicsState(NamedTuple):
     omega_body: np.ndarray
     """(N, 3) body rates, rad/s."""
     rotor_speed: np.ndarray
-    """(N, 4) rotor speeds, rad/s (order of :func:`vehicles._rotors.rotor_layout`)."""
+    """(N, 4) rotor speeds, rad/s (order of :func:`vehicles.rotor_layout`)."""
     payload_p_ned: np.ndarray
     """(3,) payload position, m."""
     payload_v_ned: np.ndarray

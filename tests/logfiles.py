@@ -13,7 +13,8 @@ from typing import Any
 
 from pymavlink import mavutil
 
-from gcs.flightlog import EARTH_RADIUS_M, TlogIndex, TlogRecorder
+from gcs.flightlog import TlogIndex, TlogRecorder
+from gcs.flightlog._flight import EARTH_RADIUS_M
 from gcs.wire import CUSTOM_MODE_ENABLED, SAFETY_ARMED, MavlinkEncoder, mavlink
 
 VEHICLES = (1, 2, 3, 4)

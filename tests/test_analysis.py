@@ -10,7 +10,8 @@ from pathlib import Path
 import pytest
 import yaml
 
-from gcs.analysis import analyze, rope_pull
+from gcs.analysis import analyze
+from gcs.analysis._worst_case import rope_pull
 from gcs.config import load_team
 from tests.conftest import run_gcs
 

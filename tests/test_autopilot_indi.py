@@ -19,33 +19,23 @@ from sim import (
     DEFAULT_AUTOPILOT_CONFIG,
     DEFAULT_WORLD_CONFIG,
     Layout,
-    World,
     build_team,
     load_world_config,
     paper_square,
-    physics_step,
     take_off,
 )
+from sim._dynamics import physics_step
+from sim._world import World
 from tests.test_autopilot_modes import solo
 from tests.test_sim_world import aloft
-from vehicles import (
-    Autopilot,
-    acceleration_increment,
-    altitude_pd,
-    biquad_reset,
-    biquad_step,
-    butterworth2,
-    effectiveness_matrix,
-    estimate_step,
-    euler_from_quaternions,
-    euler_to_quat,
-    g_matrix,
-    load_airframe,
-    load_autopilot_config,
-    quat_to_rotation,
-    rotor_thrust_increment,
-)
+from vehicles import Autopilot, load_airframe, load_autopilot_config, quat_to_rotation
+from vehicles._butterworth import biquad_reset, biquad_step, butterworth2
+from vehicles._estimator import estimate_step
+from vehicles._indi import acceleration_increment, g_matrix, rotor_thrust_increment
 from vehicles._kernel import _attitude_indi, _filter_step
+from vehicles._quaternion import euler_from_quaternions, euler_to_quat
+from vehicles._references import altitude_pd
+from vehicles._rotors import effectiveness_matrix
 
 RNG = np.random.default_rng(2019)
 

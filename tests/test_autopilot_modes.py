@@ -14,20 +14,14 @@ from sim import (
     DEFAULT_AUTOPILOT_CONFIG,
     DEFAULT_WORLD_CONFIG,
     Layout,
-    World,
     build_team,
     load_world_config,
     paper_square,
     take_off,
 )
-from vehicles import (
-    Autopilot,
-    AutopilotConfig,
-    Denial,
-    RequestOutcome,
-    load_airframe,
-    load_autopilot_config,
-)
+from sim._world import World
+from vehicles import Autopilot, AutopilotConfig, load_airframe, load_autopilot_config
+from vehicles._outcomes import Denial, RequestOutcome
 
 SOLO = Layout(np.zeros((1, 3)), np.array([20.0]), np.array([0.0, 3.0, 0.0]))
 """One vehicle whose rope is too long to ever pull."""

@@ -10,7 +10,8 @@ import pytest
 import yaml
 
 from gcs.analysis import analyze
-from gcs.config import ConfigError, load_team
+from gcs.config import load_team
+from gcs.config._team import ConfigError
 from gcs.loop import load_gamepad_config
 from tests.conftest import run_gcs
 from vehicles import BEBOP2, load_airframe

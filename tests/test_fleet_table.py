@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as v20
 
-from gcs.link import make_profile
+from gcs.link._profiles import make_profile
 from gcs.loop import FleetTable
 from gcs.wire import SimMode
 from tests.test_link_link import Rig, heartbeat, make_rig

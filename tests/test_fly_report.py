@@ -17,8 +17,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
-from gcs.flightlog import FIGURES, FlightLog, TlogIndex
+from gcs.flightlog import FlightLog, TlogIndex
 from gcs.flightlog import _report as report
+from gcs.flightlog._report import FIGURES
 from gcs.wire import SAFETY_ARMED
 from tests.conftest import SHORT, SQUARE, run_gcs
 from tests.logfiles import VEHICLES, plain_copy, raw_messages

@@ -6,21 +6,12 @@ import numpy as np
 import pytest
 
 from gcs.config import load_team
-from gcs.formation import (
-    build_formation,
-    centripetal_matrix,
-    edges_to_slots,
-    is_infinitesimally_rigid,
-    motion_basis,
-)
-from gcs.guidance import (
-    Guidance,
-    MotionDemand,
-    formation_acceleration,
-    relative_measurements,
-    saturate,
-    to_ned_saturated,
-)
+from gcs.formation import build_formation, motion_basis
+from gcs.formation._graph import is_infinitesimally_rigid
+from gcs.formation._motion import centripetal_matrix, edges_to_slots
+from gcs.guidance import Guidance, MotionDemand
+from gcs.guidance._law import formation_acceleration, relative_measurements, saturate
+from gcs.guidance._udi import to_ned_saturated
 from tests.double_integrator import yaw_rotations
 
 SQUARE = "configs/bebop_square.yaml"

@@ -25,16 +25,10 @@ import pytest
 from gcs.app import free_tcp_port
 from gcs.common import ConfigError, from_mapping
 from gcs.config import OperatorConfig, load_team
-from gcs.loop import (
-    AXES_RETRY_S,
-    Gamepad,
-    GamepadConfig,
-    GamepadMapper,
-    OperatorCommand,
-    WallClock,
-    load_gamepad_config,
-)
-from web import ControlLock, default_gamepad
+from gcs.loop import Gamepad, OperatorCommand, WallClock, load_gamepad_config
+from gcs.loop._gamepad import AXES_RETRY_S, GamepadConfig, GamepadMapper
+from web._control_lock import ControlLock
+from web._launch import default_gamepad
 
 ROOT = Path(__file__).resolve().parents[1]
 MAPPING = ROOT / "configs" / "gamepad.yaml"

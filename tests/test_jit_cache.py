@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from gcs.common import kernel_sources, refresh_numba_cache
+from gcs.common._jit_cache import kernel_sources, refresh_numba_cache
 
 ROOT = Path(__file__).resolve().parents[1]
 TREES = [ROOT / "gcs", ROOT / "vehicles", ROOT / "sim"]

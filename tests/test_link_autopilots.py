@@ -22,29 +22,23 @@ from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as v20
 
 from gcs.config import LinkConfig
-from gcs.link import (
-    DEFAULT_TELEMETRY_RATES_HZ,
-    ArduPilotProfile,
-    CommandError,
-    CommandResult,
-    Link,
-    LinkError,
-    LinkManager,
-    Px4Profile,
-    SimProfile,
-)
+from gcs.link import CommandError, Link, LinkError, LinkManager
+from gcs.link._link import DEFAULT_TELEMETRY_RATES_HZ
+from gcs.link._profile_ardupilot import ArduPilotProfile
+from gcs.link._profile_px4 import Px4Profile
+from gcs.link._profile_sim import SimProfile
 from gcs.transport import MavutilTransport
 from gcs.wire import (
-    MASK_ACCEL,
-    MASK_ACCEL_XY_POS_Z,
+    CommandResult,
     CopterMode,
     LocalPosition,
     Px4AutoSubMode,
     Px4MainMode,
     SigningKey,
     SimMode,
-    px4_custom_mode,
 )
+from gcs.wire._modes import px4_custom_mode
+from gcs.wire._setpoints import MASK_ACCEL, MASK_ACCEL_XY_POS_Z
 
 GCS_SYSID = 245
 VEHICLE = 1

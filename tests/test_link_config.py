@@ -8,10 +8,12 @@ import pytest
 import yaml
 
 from gcs.common import ConfigError, from_mapping
-from gcs.config import ZENOH, GcsLinkConfig, LinkConfig, links_from_list
-from gcs.link import LinkError, LinkManager, ProfileName
+from gcs.config import ZENOH, GcsLinkConfig, LinkConfig
+from gcs.config._links import links_from_list
+from gcs.link import LinkError, LinkManager
+from gcs.link._profile import ProfileName
 from gcs.transport import MavutilTransport
-from gcs.wire import write_signing_key
+from gcs.wire._signing import write_signing_key
 
 TEAM = """
 links:

@@ -13,14 +13,8 @@ from pymavlink.dialects.v20 import ardupilotmega as v20
 
 from gcs.link import Fanout, Link
 from gcs.transport import FrameDirection, MavutilTransport
-from gcs.wire import (
-    MASK_ACCEL_XY_POS_Z,
-    SETPOINT_MESSAGE,
-    FrameDecoder,
-    MavlinkEncoder,
-    MavMessage,
-    packed_setpoints,
-)
+from gcs.wire import SETPOINT_MESSAGE, FrameDecoder, MavlinkEncoder, MavMessage
+from gcs.wire._setpoints import MASK_ACCEL_XY_POS_Z, packed_setpoints
 
 N = 3
 

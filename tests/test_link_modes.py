@@ -5,19 +5,23 @@ from __future__ import annotations
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as v20
 
-from gcs.link import CommandError, CommandResult, Discovery, Presence, PresenceSource, VerticalPd
-from gcs.transport import ZenohSettings, zenoh_config
+from gcs.link import CommandError, Presence
+from gcs.link._discovery import Discovery, PresenceSource
+from gcs.link._profile_ardupilot import VerticalPd
+from gcs.transport import ZenohSettings
+from gcs.transport._zenoh_session import zenoh_config
 from gcs.wire import (
+    CommandResult,
     CopterMode,
     Px4AutoSubMode,
     Px4MainMode,
     SimMode,
     command_name,
     message_id,
-    message_name,
-    px4_custom_mode,
     px4_mode_text,
 )
+from gcs.wire._dialect import message_name
+from gcs.wire._modes import px4_custom_mode
 
 
 def test_sim_modes_are_defined_once_and_readable() -> None:

@@ -19,7 +19,9 @@ import zenoh
 from pymavlink.dialects.v20 import ardupilotmega as v20
 
 from gcs.config import GcsLinkConfig, LinkConfig
-from gcs.link import Link, LinkManager, Presence, PresenceEvent, PresenceSource, SimProfile
+from gcs.link import Link, LinkManager, Presence, PresenceEvent
+from gcs.link._discovery import PresenceSource
+from gcs.link._profile_sim import SimProfile
 from gcs.transport import (
     FleetReceiver,
     ZenohSettings,
@@ -32,7 +34,6 @@ from gcs.wire import (
     CUSTOM_MODE_ENABLED,
     SAFETY_ARMED,
     AccelSetpoint,
-    ClockSample,
     FrameDecoder,
     MavlinkEncoder,
     SimMode,
@@ -41,6 +42,7 @@ from gcs.wire import (
     keys,
     read_setpoint,
 )
+from gcs.wire._clockwire import ClockSample
 
 FLEET = "linktest"
 

@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gcs.flightlog import CHUNK, TlogIndex, decode_columns, wire_dtype
+from gcs.flightlog import TlogIndex
+from gcs.flightlog._columns import CHUNK, decode_columns, wire_dtype
 from gcs.wire import mavlink
 
 _NAMES = ("LOCAL_POSITION_NED", "SYS_STATUS", "DEBUG_FLOAT_ARRAY", "HEARTBEAT", "STATUSTEXT")

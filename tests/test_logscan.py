@@ -6,7 +6,7 @@ import struct
 
 import numpy as np
 
-from gcs.flightlog import CRC_EXTRA, SCAN_FIELDS, scan_buffer, scan_records
+from gcs.flightlog._scan import CRC_EXTRA, SCAN_FIELDS, scan_buffer, scan_records
 from gcs.wire import mavlink
 
 _T0_US = 1_700_000_000_000_000

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from gcs.config import OperatorConfig, SafetyConfig, load_team
-from gcs.loop import OperatorCommand, shape_stick
+from gcs.loop import OperatorCommand
+from gcs.loop._operator import shape_stick
 from gcs.loop._safety import DEFORMED, LOST, OUTSIDE, STALE, SafetyReason, evaluate, rule_flags
 
 OP = OperatorConfig(deadzone=0.1, expo=0.5, stick_timeout=1.0, altitude_rate=0.5,

@@ -9,8 +9,10 @@ import pytest
 
 from gcs.app import load_scenario
 from gcs.common import ConfigError
-from gcs.flightlog import FlightMetrics, swing_angle
-from gcs.loop import Action, Phase, PhaseError, next_phase
+from gcs.flightlog import FlightMetrics
+from gcs.flightlog._metrics import swing_angle
+from gcs.loop import Action, Phase, PhaseError
+from gcs.loop._phases import next_phase
 
 
 def test_normal_flight_sequence() -> None:

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 from pymavlink import mavutil
 
-from gcs.flightlog import ARRAYS, TlogRecorder
+from gcs.flightlog import TlogRecorder
+from gcs.flightlog._recorder import ARRAYS
 from gcs.wire import MavlinkEncoder
 from tests.logfiles import raw_messages
 

@@ -33,15 +33,12 @@ from gcs.flightlog import FlightLog, TlogIndex
 from gcs.wire import SAFETY_ARMED, MavlinkEncoder, SimMode, mavlink
 from tests.conftest import run_gcs
 from tests.logfiles import ardupilot_log, plain_copy, raw_messages, with_frame
-from web import (
-    ControlLock,
-    ControlPanel,
-    OperatorActions,
-    ReplayCursor,
-    ReplayUi,
-    Timeline,
-    replay_summary_html,
-)
+from web._actions import OperatorActions
+from web._control_lock import ControlLock
+from web._panel import ControlPanel
+from web._replay import ReplayCursor
+from web._replay_page import ReplayUi, replay_summary_html
+from web._timeline import Timeline
 from web.wireviewer import WireViewer
 
 TIMELINE = {"Play", "Pause", "Speed", "Time (s)", "Event", "Jump to event", "Previous event",

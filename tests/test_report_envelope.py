@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from gcs.flightlog import envelope
+from gcs.flightlog._report import envelope
 
 
 def test_short_series_are_kept_whole() -> None:

@@ -12,9 +12,12 @@ from collections.abc import Iterator
 
 import pytest
 
-from gcs.app import GcsApp, Scenario, SimProcess, Step, free_tcp_port, play
+from gcs.app import GcsApp, SimProcess, free_tcp_port
+from gcs.app._scenario import Scenario, Step, play
 from gcs.config import load_team
-from gcs.loop import Action, ClockStoppedError, Phase, SafetyReason
+from gcs.loop import Action, Phase
+from gcs.loop._clock import ClockStoppedError
+from gcs.loop._safety import SafetyReason
 from gcs.transport import ZenohSettings
 from gcs.wire import SimMode, keys
 

@@ -18,9 +18,10 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 
-from gcs.app import GcsApp, Scenario, SimProcess, Step, free_tcp_port, play
+from gcs.app import GcsApp, SimProcess, free_tcp_port
+from gcs.app._scenario import Scenario, Step, play
 from gcs.config import load_team
-from gcs.link import SimProfile
+from gcs.link._profile_sim import SimProfile
 from gcs.loop import Phase
 from gcs.transport import FrameDirection, ZenohSettings
 from gcs.wire import SETPOINT_MESSAGE

@@ -13,13 +13,13 @@ from sim import (
     DEFAULT_AIRFRAME,
     DEFAULT_AUTOPILOT_CONFIG,
     DEFAULT_WORLD_CONFIG,
-    RopeConfig,
-    World,
     build_team,
     load_world_config,
     ring_layout,
     take_off,
 )
+from sim._config import RopeConfig
+from sim._world import World
 from vehicles import load_airframe, load_autopilot_config
 
 PAYLOAD_MASS = 0.4

@@ -20,15 +20,13 @@ from sim import (
     DEFAULT_AIRFRAME,
     DEFAULT_AUTOPILOT_CONFIG,
     DEFAULT_WORLD_CONFIG,
-    SensorConfig,
-    WindConfig,
-    World,
-    WorldConfig,
     build_team,
     load_world_config,
     paper_square,
     take_off,
 )
+from sim._config import SensorConfig, WindConfig, WorldConfig
+from sim._world import World
 from vehicles import Autopilot, load_airframe, load_autopilot_config, quat_to_rotation
 
 PAYLOAD_MASS = 0.4

@@ -20,11 +20,11 @@ from sim import (
     DEFAULT_AUTOPILOT_CONFIG,
     DEFAULT_WORLD_CONFIG,
     BackgroundStepping,
-    HostOptions,
-    SimHost,
-    can_lift,
     load_world_config,
 )
+from sim._host import SimHost
+from sim._options import HostOptions
+from sim._priority import can_lift
 from vehicles import load_autopilot_config
 
 CONFIG = Path(__file__).resolve().parents[1] / "configs" / "bebop_square.yaml"

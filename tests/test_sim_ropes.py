@@ -15,9 +15,9 @@ from sim import (
     build_team,
     load_world_config,
     paper_square,
-    rope_tension,
     take_off,
 )
+from sim._ropes import rope_tension
 from vehicles import load_airframe, load_autopilot_config, quat_to_rotation
 
 K, C, L = 5000.0, 30.0, 1.0

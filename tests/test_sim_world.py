@@ -16,27 +16,24 @@ from sim import (
     DEFAULT_AIRFRAME,
     DEFAULT_AUTOPILOT_CONFIG,
     DEFAULT_WORLD_CONFIG,
-    SensorConfig,
-    WindConfig,
-    World,
-    WorldConfig,
     build_team,
     load_world_config,
     paper_square,
     ring_layout,
     take_off,
 )
+from sim._config import SensorConfig, WindConfig, WorldConfig
+from sim._world import World
 from vehicles import (
     Airframe,
     Autopilot,
     AutopilotConfig,
-    bebop2,
-    euler_to_quat,
     load_airframe,
     load_autopilot_config,
-    quat_multiply,
     quat_to_rotation,
 )
+from vehicles._airframe import bebop2
+from vehicles._quaternion import euler_to_quat, quat_multiply
 
 
 def team(seed: int, config: WorldConfig | None = None) -> tuple[World, Autopilot]:

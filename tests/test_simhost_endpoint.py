@@ -18,35 +18,27 @@ import pytest
 
 from gcs.wire import (
     CUSTOM_MODE_ENABLED,
-    MASK_ACCEL,
-    MASK_ACCEL_XY_POS_Z,
     SAFETY_ARMED,
     FrameDecoder,
     MavlinkEncoder,
     MavMessage,
     SigningKey,
     SimMode,
-    accel_setpoint_message,
     mavlink,
 )
+from gcs.wire._setpoints import MASK_ACCEL, MASK_ACCEL_XY_POS_Z, accel_setpoint_message
 from sim import (
     DEFAULT_AIRFRAME,
     DEFAULT_AUTOPILOT_CONFIG,
     DEFAULT_WORLD_CONFIG,
-    World,
     build_team,
     load_world_config,
     paper_square,
 )
-from vehicles import (
-    Autopilot,
-    Battery,
-    BatteryConfig,
-    StreamSchedule,
-    TelemetryMessage,
-    load_airframe,
-    load_autopilot_config,
-)
+from sim._world import World
+from vehicles import Autopilot, load_airframe, load_autopilot_config
+from vehicles._battery import Battery, BatteryConfig
+from vehicles._streams import StreamSchedule, TelemetryMessage
 from vehicles.endpoint import VehicleEndpoint
 
 SYSID = 7

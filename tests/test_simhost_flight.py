@@ -18,12 +18,14 @@ from pathlib import Path
 import pytest
 import zenoh
 
-from gcs.app import SimProcess, SimStartError, free_tcp_port
+from gcs.app import SimProcess, free_tcp_port
+from gcs.app._simprocess import SimStartError
 from gcs.config import GcsLinkConfig, Team, load_team
-from gcs.link import LinkManager, Presence, PresenceEvent, PresenceSource
+from gcs.link import LinkManager, Presence, PresenceEvent
+from gcs.link._discovery import PresenceSource
 from gcs.transport import ZenohSettings
 from gcs.wire import MavlinkEncoder, MavMessage, SimMode, SimTruth, decode_clock, keys, mavlink
-from sim import ControlAction, ControlCommand
+from sim._faults import ControlAction, ControlCommand
 
 ROOT = Path(__file__).resolve().parent.parent
 CONFIG = ROOT / "configs" / "bebop_square.yaml"

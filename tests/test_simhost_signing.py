@@ -12,17 +12,15 @@ from pathlib import Path
 import pytest
 
 from gcs.app import SimProcess, free_tcp_port
-from gcs.config import ConfigError, GcsLinkConfig, load_team
-from gcs.link import CommandError, CommandResult, Link, LinkManager
+from gcs.config import GcsLinkConfig, load_team
+from gcs.config._team import ConfigError
+from gcs.link import CommandError, Link, LinkManager
 from gcs.transport import ZenohSettings, ZenohTransport
-from gcs.wire import mavlink, write_signing_key
-from sim import (
-    DEFAULT_AUTOPILOT_CONFIG,
-    DEFAULT_WORLD_CONFIG,
-    HostOptions,
-    SimHost,
-    load_world_config,
-)
+from gcs.wire import CommandResult, mavlink
+from gcs.wire._signing import write_signing_key
+from sim import DEFAULT_AUTOPILOT_CONFIG, DEFAULT_WORLD_CONFIG, load_world_config
+from sim._host import SimHost
+from sim._options import HostOptions
 from vehicles import load_autopilot_config
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -18,7 +18,8 @@ from pathlib import Path
 import pytest
 from pymavlink import mavutil
 
-from gcs.app import SimProcess, SimStartError, free_tcp_port
+from gcs.app import SimProcess, free_tcp_port
+from gcs.app._simprocess import SimStartError
 from gcs.wire import SimMode, mavlink
 
 ROOT = Path(__file__).resolve().parent.parent

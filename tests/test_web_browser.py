@@ -34,7 +34,8 @@ from gcs.app import free_tcp_port
 from gcs.transport import ZenohSettings, open_session
 from gcs.wire import SimTruth, keys
 from tests.colours import hue_apart, hue_saturation_value
-from web import ABORT_ANSWERS, palette
+from web import palette
+from web._browser_script import ABORT_ANSWERS
 from web.wireviewer import SceneRecord
 
 CHROMIUM = Path("/usr/bin/chromium")
@@ -316,7 +317,7 @@ def scene_pixels(page, save: Path) -> tuple[int, int]:  # type: ignore[no-untype
     """Pixels of the 3-D view in an ok vehicle's green and in the payload's magenta.
 
     By hue and saturation, whatever the lighting's shade: no other colour of the
-    scene comes near these hues (``web/_palette.py``, the rule tested in
+    scene comes near these hues (``web/palette.py``, the rule tested in
     test_web_frame.py), nor do the page's notifications or the red abort button.
     The screenshot is saved to ``save``.
     """

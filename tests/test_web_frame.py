@@ -14,8 +14,10 @@ from gcs.config import load_team
 from gcs.loop import FleetState
 from gcs.wire import SimTruth
 from tests.colours import hue_apart, hue_saturation_value
-from web import Trails, fit_shape, palette, quad_mesh, yaw_wxyz
+from web import Trails, palette, quad_mesh
 from web._frame import LABEL_LIFT, TeamView, build_frame, rope_pull_estimate, vehicle_states
+from web._quadmesh import yaw_wxyz
+from web._shapefit import fit_shape
 from web.palette import VehicleState
 
 ROOT = Path(__file__).resolve().parents[1]

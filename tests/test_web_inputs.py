@@ -7,23 +7,25 @@ import re
 
 import pytest
 
-from web import (
+from web._browser_input import (
+    HOLD_ACTIONS,
+    HOTKEYS,
+    INPUT_TIMEOUT,
+    STEP_ACTIONS,
+    InputTracker,
+    parse_input,
+)
+from web._browser_script import (
     ABORT_ANSWERS,
     ABORT_HOTKEY,
     ABORT_MODIFIER,
     CHANNEL_LABEL,
-    HOLD_ACTIONS,
-    HOTKEYS,
-    INPUT_TIMEOUT,
     SEND_PERIOD_MS,
-    STEP_ACTIONS,
-    ControlLock,
-    InputTracker,
     abort_keys,
     pads_html,
-    parse_input,
     script_source,
 )
+from web._control_lock import ControlLock
 
 
 def line(seq: int, keys: str = "", steps: str = "", pad: str = "0.00,0.00",

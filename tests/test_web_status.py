@@ -14,28 +14,14 @@ from gcs.analysis import analyze
 from gcs.config import load_team
 from gcs.guidance import MotionDemand
 from gcs.link import LinkHealth
-from gcs.loop import (
-    Event,
-    FleetState,
-    OperatorSnapshot,
-    Phase,
-    RuntimeSnapshot,
-    SafetyEvent,
-    SafetyReason,
-    SafetyVerdict,
-    TickStats,
-)
+from gcs.loop import FleetState, OperatorSnapshot, Phase, RuntimeSnapshot, TickStats
+from gcs.loop._runtime import Event
+from gcs.loop._safety import SafetyEvent, SafetyReason, SafetyVerdict
 from gcs.wire import SimTruth
-from web import (
-    History,
-    TeamView,
-    UiStats,
-    events_html,
-    palette,
-    rope_pull_estimate,
-    summary_html,
-    vehicles_html,
-)
+from web import TeamView, palette
+from web._frame import rope_pull_estimate
+from web._history import History
+from web._status import UiStats, events_html, summary_html, vehicles_html
 
 ROOT = Path(__file__).resolve().parents[1]
 TEAM = load_team(ROOT / "configs" / "bebop_square.yaml")

@@ -21,20 +21,11 @@ from gcs.config import load_team
 from gcs.loop import FleetState, OperatorCommand
 from gcs.transport import ZenohSettings
 from gcs.wire import SimTruth
-from web import (
-    FOLLOW_STEP,
-    ControlLock,
-    ControlPanel,
-    OperatorActions,
-    SceneFrame,
-    SceneView,
-    TeamView,
-    Trails,
-    WebUi,
-    build_frame,
-    palette,
-    quad_mesh,
-)
+from web import SceneView, TeamView, Trails, WebUi, build_frame, palette, quad_mesh
+from web._actions import OperatorActions
+from web._control_lock import ControlLock
+from web._frame import SceneFrame
+from web._panel import FOLLOW_STEP, ControlPanel
 from web.wireviewer import WireViewer
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -39,115 +39,43 @@ Modules:
                          commands, setpoints, telemetry.
 """
 
-from vehicles import endpoint
-from vehicles._airframe import BEBOP2, Airframe, bebop2, load_airframe
+import importlib
+from types import ModuleType
+
+from vehicles._airframe import BEBOP2, Airframe, load_airframe
 from vehicles._autopilot import Autopilot
-from vehicles._battery import AIR_DENSITY, Battery, BatteryConfig, BatteryReading
-from vehicles._butterworth import biquad_reset, biquad_step, butterworth2
-from vehicles._commands import FORCE_DISARM_MAGIC, CommandOutcome, MavResult, execute_command
 from vehicles._config import AutopilotConfig, load_autopilot_config
-from vehicles._estimator import estimate_step
-from vehicles._indi import acceleration_increment, g_matrix, rotor_thrust_increment
 from vehicles._kernel import autopilot_step
 from vehicles._outcomes import Denial, RequestOutcome
-from vehicles._quaternion import (
-    euler_from_quaternions,
-    euler_to_quat,
-    quat_integrate,
-    quat_multiply,
-    quat_to_euler,
-    quat_to_rotation,
-)
-from vehicles._references import altitude_pd, climb_ramp, position_hold
-from vehicles._reports import LOW_BATTERY, CommCounters, VehicleView, build_report, time_boot_ms
-from vehicles._rotors import RotorLayout, effectiveness_matrix, rotor_layout
-from vehicles._setpoint_check import Refusal, SetpointLimits, SetpointVerdict, check_setpoint
-from vehicles._state import (
-    ACCEL_SIGNALS,
-    GRAVITY,
-    RATE_SIGNALS,
-    AutopilotParams,
-    AutopilotState,
-    Measurements,
-    make_autopilot_params,
-    make_autopilot_state,
-    make_measurements,
-)
-from vehicles._streams import DEFAULT_RATES_HZ, IntervalRequest, StreamSchedule, TelemetryMessage
-from vehicles._transitions import (
-    enter_armed_hold,
-    enter_disarmed,
-    enter_hold,
-    enter_land,
-    enter_offboard,
-    enter_takeoff,
-)
+from vehicles._quaternion import quat_integrate, quat_to_rotation
+from vehicles._rotors import rotor_layout
+from vehicles._state import AutopilotParams, AutopilotState, Measurements, make_measurements
 
 __all__ = [
-    "ACCEL_SIGNALS",
-    "AIR_DENSITY",
     "BEBOP2",
-    "DEFAULT_RATES_HZ",
-    "FORCE_DISARM_MAGIC",
-    "GRAVITY",
-    "LOW_BATTERY",
-    "RATE_SIGNALS",
     "Airframe",
     "Autopilot",
     "AutopilotConfig",
     "AutopilotParams",
     "AutopilotState",
-    "Battery",
-    "BatteryConfig",
-    "BatteryReading",
-    "CommCounters",
-    "CommandOutcome",
     "Denial",
-    "IntervalRequest",
-    "MavResult",
     "Measurements",
-    "Refusal",
     "RequestOutcome",
-    "RotorLayout",
-    "SetpointLimits",
-    "SetpointVerdict",
-    "StreamSchedule",
-    "TelemetryMessage",
-    "VehicleView",
-    "acceleration_increment",
-    "altitude_pd",
     "autopilot_step",
-    "bebop2",
-    "biquad_reset",
-    "biquad_step",
-    "build_report",
-    "butterworth2",
-    "check_setpoint",
-    "climb_ramp",
-    "effectiveness_matrix",
     "endpoint",
-    "enter_armed_hold",
-    "enter_disarmed",
-    "enter_hold",
-    "enter_land",
-    "enter_offboard",
-    "enter_takeoff",
-    "estimate_step",
-    "euler_from_quaternions",
-    "euler_to_quat",
-    "execute_command",
-    "g_matrix",
     "load_airframe",
     "load_autopilot_config",
-    "make_autopilot_params",
-    "make_autopilot_state",
     "make_measurements",
-    "position_hold",
     "quat_integrate",
-    "quat_multiply",
-    "quat_to_euler",
     "quat_to_rotation",
     "rotor_layout",
-    "rotor_thrust_increment",
-    "time_boot_ms",
 ]
+
+_PUBLIC_MODULES = ("endpoint",)
+
+
+def __getattr__(name: str) -> ModuleType:
+    """Public modules load on first use, not with the package."""
+    if name in _PUBLIC_MODULES:
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -5,7 +5,7 @@ advances them all with one numba call per 512 Hz step. Commands and setpoints
 address one vehicle by index and take effect at the next step. Nothing here
 blocks or talks to a network: a MAVLink endpoint maps SET_POSITION_TARGET_LOCAL_NED
 onto the setpoint methods and COMMAND_LONG onto the command methods, whose
-:class:`~vehicles._outcomes.RequestOutcome` becomes the COMMAND_ACK.
+:class:`~vehicles.RequestOutcome` becomes the COMMAND_ACK.
 """
 
 from __future__ import annotations
@@ -78,7 +78,7 @@ class Autopilot:
     def step(self, measurements: Measurements) -> np.ndarray:
         """Run one control period on the latest measurements; returns rotor speed
         commands (N, 4) in rad/s. Simulations normally step through
-        :meth:`sim._world.World.run`, which calls the same kernel in lockstep."""
+        :meth:`sim.World.run`, which calls the same kernel in lockstep."""
         autopilot_step(self.state, self.params, measurements)
         return self.state.rotor_speed_cmd.copy()
 

@@ -2,7 +2,7 @@
 
 Why: the GCS's autopilot profile (``gcs.link._profile_sim``) drives the
 vehicle with exactly these commands and confirms each step, so every command
-must map onto one :class:`~vehicles._autopilot.Autopilot` action and answer
+must map onto one :class:`~vehicles.Autopilot` action and answer
 with the result a real autopilot would give:
 
 =============================  ==========================================================
@@ -25,37 +25,27 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from enum import IntEnum
 
-from gcs.wire import CUSTOM_MODE_ENABLED, MavMessage, SimMode, mavlink
+from gcs.wire import CUSTOM_MODE_ENABLED, CommandResult, MavMessage, SimMode, mavlink
 from vehicles._autopilot import Autopilot
 from vehicles._outcomes import Denial, RequestOutcome
 from vehicles._streams import IntervalRequest, StreamSchedule
 
-__all__ = ["FORCE_DISARM_MAGIC", "CommandOutcome", "MavResult", "execute_command"]
+__all__ = ["FORCE_DISARM_MAGIC", "CommandOutcome", "execute_command"]
 
 FORCE_DISARM_MAGIC = 21196
 """COMPONENT_ARM_DISARM param2 that disarms even in flight (the MAVLink convention)."""
-
-
-class MavResult(IntEnum):
-    """``MAV_RESULT`` values this vehicle answers with."""
-
-    ACCEPTED = mavlink.MAV_RESULT_ACCEPTED
-    TEMPORARILY_REJECTED = mavlink.MAV_RESULT_TEMPORARILY_REJECTED
-    DENIED = mavlink.MAV_RESULT_DENIED
-    UNSUPPORTED = mavlink.MAV_RESULT_UNSUPPORTED
 
 
 @dataclass(frozen=True)
 class CommandOutcome:
     """Result for the COMMAND_ACK and, when refused, the reason for a STATUSTEXT."""
 
-    result: MavResult
+    result: CommandResult
     reason: str = ""
 
 
-_ACCEPTED = CommandOutcome(MavResult.ACCEPTED)
+_ACCEPTED = CommandOutcome(CommandResult.ACCEPTED)
 
 
 def execute_command(msg: MavMessage, autopilot: Autopilot, index: int,
@@ -75,8 +65,8 @@ def execute_command(msg: MavMessage, autopilot: Autopilot, index: int,
                                        msg.param2, t)
         if request is IntervalRequest.SET:
             return _ACCEPTED
-        return CommandOutcome(MavResult.DENIED, f"interval: {request.value}")
-    return CommandOutcome(MavResult.UNSUPPORTED)
+        return CommandOutcome(CommandResult.DENIED, f"interval: {request.value}")
+    return CommandOutcome(CommandResult.UNSUPPORTED)
 
 
 def _arm_disarm(msg: MavMessage, autopilot: Autopilot, index: int) -> CommandOutcome:
@@ -85,13 +75,13 @@ def _arm_disarm(msg: MavMessage, autopilot: Autopilot, index: int) -> CommandOut
     if msg.param1 == 0.0:
         return _outcome(autopilot.disarm(index, force=msg.param2 == FORCE_DISARM_MAGIC),
                         "disarm")
-    return CommandOutcome(MavResult.DENIED, f"arm: param1 must be 0 or 1, got {msg.param1:g}")
+    return CommandOutcome(CommandResult.DENIED, f"arm: param1 must be 0 or 1, got {msg.param1:g}")
 
 
 def _takeoff(climb_m: float, autopilot: Autopilot, index: int) -> CommandOutcome:
     """NAV_TAKEOFF param7 is the climb above the current position (see gcs.link._profile_sim)."""
     if not math.isfinite(climb_m) or climb_m <= 0.0:
-        return CommandOutcome(MavResult.DENIED, "takeoff: param7 must be a climb > 0 m")
+        return CommandOutcome(CommandResult.DENIED, "takeoff: param7 must be a climb > 0 m")
     state = autopilot.state
     height = float(state.z_home[index] - state.p_est[index, 2]) if autopilot.armed[index] else 0.0
     return _outcome(autopilot.takeoff(index, max(0.0, height) + climb_m), "takeoff")
@@ -99,17 +89,17 @@ def _takeoff(climb_m: float, autopilot: Autopilot, index: int) -> CommandOutcome
 
 def _set_mode(msg: MavMessage, autopilot: Autopilot, index: int) -> CommandOutcome:
     if not math.isfinite(msg.param1) or not int(msg.param1) & CUSTOM_MODE_ENABLED:
-        return CommandOutcome(MavResult.DENIED, "set mode: param1 needs CUSTOM_MODE_ENABLED")
+        return CommandOutcome(CommandResult.DENIED, "set mode: param1 needs CUSTOM_MODE_ENABLED")
     try:
         mode = SimMode(int(msg.param2)) if math.isfinite(msg.param2) else None
     except ValueError:
         mode = None
     if mode is None:
-        return CommandOutcome(MavResult.DENIED, f"set mode: unknown mode {msg.param2:g}")
+        return CommandOutcome(CommandResult.DENIED, f"set mode: unknown mode {msg.param2:g}")
     if mode is SimMode.DISARMED:
         return _outcome(autopilot.disarm(index), "mode DISARMED")
     if mode is SimMode.TAKEOFF:
-        return CommandOutcome(MavResult.DENIED, "set mode: take off with NAV_TAKEOFF")
+        return CommandOutcome(CommandResult.DENIED, "set mode: take off with NAV_TAKEOFF")
     if mode is SimMode.HOLD:
         return _outcome(autopilot.hold(index), "mode HOLD")
     if mode is SimMode.OFFBOARD:
@@ -121,5 +111,6 @@ def _outcome(result: RequestOutcome, what: str) -> CommandOutcome:
     if result.accepted:
         return _ACCEPTED
     assert result.denial is not None
-    code = MavResult.TEMPORARILY_REJECTED if result.denial is Denial.NO_POSE else MavResult.DENIED
+    retry = result.denial is Denial.NO_POSE
+    code = CommandResult.TEMPORARILY_REJECTED if retry else CommandResult.DENIED
     return CommandOutcome(code, f"{what} denied: {result.denial.value}")

@@ -25,14 +25,14 @@ class Denial(Enum):
 
 @dataclass(frozen=True)
 class RequestOutcome:
-    """Outcome of a mode or arming request (later sent as COMMAND_ACK)."""
+    """Outcome of a mode or arming request; the endpoint answers it with a COMMAND_ACK."""
 
     accepted: bool
     denial: Denial | None = None
 
     def __post_init__(self) -> None:
         if self.accepted == (self.denial is not None):
-            raise ValueError("a command result has a denial reason exactly when it is denied")
+            raise ValueError("a request outcome has a denial reason exactly when it is denied")
 
     @property
     def text(self) -> str:

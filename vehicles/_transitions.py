@@ -2,7 +2,7 @@
 
 Each function switches vehicle ``i`` into a mode and records what that mode
 needs (where to hold, where home is). They are numba functions so the kernel
-calls them at 512 Hz and :class:`vehicles._autopilot.Autopilot` calls the same
+calls them at 512 Hz and :class:`vehicles.Autopilot` calls the same
 code when a command arrives.
 """
 

@@ -3,7 +3,7 @@
 Why: the GCS sees a simulated vehicle only through MAVLink, exactly as it
 would see PX4 or ArduPilot, so every behaviour the GCS relies on (the
 contract in ``gcs/link/README.md``) lives here, between the bytes and the
-:class:`~vehicles._autopilot.Autopilot`:
+:class:`~vehicles.Autopilot`:
 
 - a MAVLink 2 system with its own system id, component 1; frames addressed
   to another system or component are counted and ignored, bad bytes are
@@ -46,6 +46,7 @@ from typing import TypeAlias
 
 from gcs.wire import (
     AccelSetpoint,
+    CommandResult,
     DecodeStats,
     FrameDecoder,
     MavlinkEncoder,
@@ -56,7 +57,7 @@ from gcs.wire import (
 )
 from vehicles._autopilot import Autopilot
 from vehicles._battery import Battery
-from vehicles._commands import CommandOutcome, MavResult, execute_command
+from vehicles._commands import CommandOutcome, execute_command
 from vehicles._reports import CommCounters, VehicleView, build_report, time_boot_ms
 from vehicles._setpoint_check import Refusal, SetpointLimits, check_setpoint
 from vehicles._state import Measurements
@@ -228,12 +229,12 @@ class VehicleEndpoint:
             msg.param7))
         last = self._last_command
         if (msg.confirmation > 0 and last is not None and last[0] == key
-                and last[1].result is not MavResult.TEMPORARILY_REJECTED):
+                and last[1].result is not CommandResult.TEMPORARILY_REJECTED):
             outcome = last[1]  # a retry whose first copy was carried out: the same answer
         else:
             outcome = execute_command(msg, self._autopilot, self._index, self._streams, t)
             self._last_command = (key, outcome)
-            if outcome.result is not MavResult.ACCEPTED and outcome.reason:
+            if outcome.result is not CommandResult.ACCEPTED and outcome.reason:
                 self._status_text(Severity.WARNING, outcome.reason)
         self._ack(msg, outcome.result)
         self._heartbeat_if_mode_changed(t)
@@ -242,9 +243,9 @@ class VehicleEndpoint:
         """No command is taken in COMMAND_INT form here: say so rather than stay silent."""
         with self._rx_lock:
             self._commands += 1
-        self._ack(msg, MavResult.UNSUPPORTED)
+        self._ack(msg, CommandResult.UNSUPPORTED)
 
-    def _ack(self, msg: MavMessage, result: MavResult) -> None:
+    def _ack(self, msg: MavMessage, result: CommandResult) -> None:
         self._emit(self._encoder.mav.command_ack_encode(
             msg.command, int(result), 0, 0, msg.get_srcSystem(), msg.get_srcComponent()))
 

@@ -38,120 +38,37 @@ Modules:
                          decodes what it gets.
 """
 
-from web import palette, wireviewer
-from web._actions import OperatorActions
-from web._browser_input import (
-    HOLD_ACTIONS,
-    HOTKEYS,
-    INPUT_TIMEOUT,
-    STEP_ACTIONS,
-    BrowserInput,
-    InputTracker,
-    parse_input,
-)
-from web._browser_script import (
-    ABORT_ANSWER_WAIT_MS,
-    ABORT_ANSWERS,
-    ABORT_HOTKEY,
-    ABORT_LABEL,
-    ABORT_MODIFIER,
-    CHANNEL_LABEL,
-    SEND_PERIOD_MS,
-    abort_keys,
-    answer_abort,
-    install_script,
-    pads_html,
-    script_source,
-)
-from web._control_lock import ControlLock
-from web._frame import SceneFrame, TeamView, build_frame, rope_pull_estimate, vehicle_states
-from web._history import History, Series
-from web._launch import DEFAULT_GAMEPAD, default_gamepad, run_demo, run_gcs, serve
-from web._panel import FOLLOW_STEP, HOTKEY_HELP, PHASE_BUTTONS, ControlPanel, abort_for
-from web._plots import MAX_SERIES, PlotsView
-from web._quadmesh import quad_mesh, yaw_wxyz
-from web._replay import ReplayCursor, ReplayEvent, ReplayState, replay_view
-from web._replay_page import ReplayUi, replay_summary_html, run_replay
-from web._scene import LABEL_STEP, LABELS_PER_FRAME, SceneView
-from web._shapefit import fit_shape
-from web._status import (
-    UiStats,
-    events_html,
-    rope_legend,
-    summary_html,
-    vehicle_table_html,
-    vehicles_html,
-)
-from web._timeline import SPEEDS, Timeline
+import importlib
+from types import ModuleType
+
+from web._frame import TeamView, build_frame
+from web._launch import run_demo, run_gcs
+from web._quadmesh import quad_mesh
+from web._replay_page import run_replay
+from web._scene import SceneView
 from web._trails import Trails
-from web._ui import UI_RATE_HZ, WebUi, page_url
+from web._ui import UI_RATE_HZ, WebUi
 
 __all__ = [
-    "ABORT_ANSWERS",
-    "ABORT_ANSWER_WAIT_MS",
-    "ABORT_HOTKEY",
-    "ABORT_LABEL",
-    "ABORT_MODIFIER",
-    "CHANNEL_LABEL",
-    "DEFAULT_GAMEPAD",
-    "FOLLOW_STEP",
-    "HOLD_ACTIONS",
-    "HOTKEYS",
-    "HOTKEY_HELP",
-    "INPUT_TIMEOUT",
-    "LABELS_PER_FRAME",
-    "LABEL_STEP",
-    "MAX_SERIES",
-    "PHASE_BUTTONS",
-    "SEND_PERIOD_MS",
-    "SPEEDS",
-    "STEP_ACTIONS",
     "UI_RATE_HZ",
-    "BrowserInput",
-    "ControlLock",
-    "ControlPanel",
-    "History",
-    "InputTracker",
-    "OperatorActions",
-    "PlotsView",
-    "ReplayCursor",
-    "ReplayEvent",
-    "ReplayState",
-    "ReplayUi",
-    "SceneFrame",
     "SceneView",
-    "Series",
     "TeamView",
-    "Timeline",
     "Trails",
-    "UiStats",
     "WebUi",
-    "abort_for",
-    "abort_keys",
-    "answer_abort",
     "build_frame",
-    "default_gamepad",
-    "events_html",
-    "fit_shape",
-    "install_script",
-    "pads_html",
-    "page_url",
     "palette",
-    "parse_input",
     "quad_mesh",
-    "replay_summary_html",
-    "replay_view",
-    "rope_legend",
-    "rope_pull_estimate",
     "run_demo",
     "run_gcs",
     "run_replay",
-    "script_source",
-    "serve",
-    "summary_html",
-    "vehicle_states",
-    "vehicle_table_html",
-    "vehicles_html",
     "wireviewer",
-    "yaw_wxyz",
 ]
+
+_PUBLIC_MODULES = ("palette", "wireviewer",)
+
+
+def __getattr__(name: str) -> ModuleType:
+    """Public modules load on first use, not with the package."""
+    if name in _PUBLIC_MODULES:
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,7 +1,7 @@
 """What a viewer can do to the flight, in the loop's time.
 
-The browser writes to the same :class:`~gcs.loop._operator.OperatorCommand` and asks
-the same :meth:`~gcs.loop._runtime.Runtime.request` as the gamepad and scripted
+The browser writes to the same :class:`~gcs.loop.OperatorCommand` and asks
+the same :meth:`~gcs.loop.Runtime.request` as the gamepad and scripted
 scenarios; this wrapper only adds the loop's clock and turns a refused phase
 action into a message for the viewer instead of an exception in a callback.
 """

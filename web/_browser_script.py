@@ -7,14 +7,14 @@ buttons with ``on_hold``, but no joystick. This script adds both:
 * hotkeys (:data:`web._browser_input.HOTKEYS`) tracked down *and* up, ignored
   while typing in a text field (not after clicking a checkbox or a button) or
   with Ctrl/Alt/Cmd held; released on window blur;
-* two virtual sticks drawn by :data:`PADS_HTML` (a round pad for translation,
+* two virtual sticks drawn by :func:`pads_html` (a round pad for translation,
   a bar for rotation) that follow the pointer and spring back to the centre
   on release.
 
 It also draws the **always-visible abort**: a fixed button over the page,
 above every panel, that no panel's collapse or scroll can hide. It aborts
 through viser's command hotkey (``ABORT_HOTKEY`` with ``ABORT_MODIFIER``,
-Ctrl+Shift+X), registered for every viewer by :class:`web._ui.WebUi`: the
+Ctrl+Shift+X), registered for every viewer by :class:`web.WebUi`: the
 button dispatches that key press, viser's page sends the command over its
 websocket, and the server runs the same abort as the panel's ABORT button
 for the viewer it came from (any viewer may abort). A key press rather than

@@ -1,8 +1,8 @@
 """A recorded flight as the state at any moment: what the replay page draws.
 
-:class:`ReplayCursor` turns a :class:`~gcs.flightlog._flight.FlightLog` into the same
-arrays the live page draws from (a :class:`~gcs.loop._fleet.FleetState` and, in
-simulation, a :class:`~gcs.wire._simtruth.SimTruth`), so the replay reuses the live
+:class:`ReplayCursor` turns a :class:`~gcs.flightlog.FlightLog` into the same
+arrays the live page draws from (a :class:`~gcs.loop.FleetState` and, in
+simulation, a :class:`~gcs.wire.SimTruth`), so the replay reuses the live
 scene code unchanged. It is stateless: the state at ``t`` depends on ``t`` only,
 so scrubbing backwards is as exact as playing forwards.
 

@@ -1,6 +1,6 @@
 """The replay page: a recorded flight drawn by the live page's scene and plots.
 
-The scene (:class:`~web._scene.SceneView`, :func:`~web._frame.build_frame`) and the
+The scene (:class:`~web.SceneView`, :func:`~web.build_frame`) and the
 plots (:class:`~web._history.History`, :class:`~web._plots.PlotsView`) are the live
 ones, fed from a :class:`~web._replay.ReplayCursor` instead of the links; the
 status is a replay summary (nothing of the live loop's health is recorded). The
@@ -50,7 +50,7 @@ def replay_summary_html(state: ReplayState, *, start: float, name: str,
                         missing: list[str], damage: str | None = None) -> str:
     """Replay time, phase, the recorded command and worst error, and what the log lacks.
 
-    ``damage`` (:meth:`~gcs.flightlog._reader.TlogIndex.damage`) is shown beside what is
+    ``damage`` (:meth:`~gcs.flightlog.TlogIndex.damage`) is shown beside what is
     missing: a cut or corrupt log lacks what its damaged records held.
     """
     phase = state.phase.text if state.phase is not None else "–"

@@ -10,26 +10,12 @@ Modules:
                      worst case").
 """
 
-from gcs.analysis._worst_case import (
-    GAIN_FIELDS,
-    Analysis,
-    Violation,
-    a_safe_span,
-    analysis_json,
-    analyze,
-    format_report,
-    gain_violation,
-    rope_pull,
-)
+from gcs.analysis._worst_case import Analysis, a_safe_span, analysis_json, analyze, format_report
 
 __all__ = [
-    "GAIN_FIELDS",
     "Analysis",
-    "Violation",
     "a_safe_span",
     "analysis_json",
     "analyze",
     "format_report",
-    "gain_violation",
-    "rope_pull",
 ]

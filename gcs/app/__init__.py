@@ -17,12 +17,13 @@ Modules:
                      wait until it is up.
 """
 
-from gcs.app._app import GcsApp
+from gcs.app._app import LOOP_GIL_SWITCH_S, GcsApp
 from gcs.app._fly import FlightResult, fly
-from gcs.app._scenario import Scenario, ScenarioError, Step, Sticks, load_scenario, play
+from gcs.app._scenario import Scenario, ScenarioError, Step, load_scenario
 from gcs.app._simprocess import SimProcess, SimStartError, free_tcp_port
 
 __all__ = [
+    "LOOP_GIL_SWITCH_S",
     "FlightResult",
     "GcsApp",
     "Scenario",
@@ -30,9 +31,7 @@ __all__ = [
     "SimProcess",
     "SimStartError",
     "Step",
-    "Sticks",
     "fly",
     "free_tcp_port",
     "load_scenario",
-    "play",
 ]

@@ -38,7 +38,7 @@ from gcs.loop import (
 from gcs.transport import Arrivals, FrameDirection, ZenohSettings, open_session
 from gcs.wire import MavlinkEncoder, MavMessage, SimTruth, decode_clock, encode_time, keys, mavlink
 
-__all__ = ["GcsApp"]
+__all__ = ["LOOP_GIL_SWITCH_S", "GcsApp"]
 
 
 SIM_CLOCK_TIMEOUT_S = HOLD_CAP_S + 5.0

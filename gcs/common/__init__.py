@@ -14,14 +14,8 @@ Modules:
     ``_typed_config``  Typed, validated configuration objects built from YAML.
 """
 
-from gcs.common._jit_cache import kernel, kernel_sources, refresh_numba_cache
-from gcs.common._shipped import (
-    LOCAL_CONFIGS,
-    default_config,
-    missing_config_hint,
-    shipped_config,
-    shipped_configs,
-)
+from gcs.common._jit_cache import kernel
+from gcs.common._shipped import LOCAL_CONFIGS, default_config, shipped_config
 from gcs.common._threads import join_thread
 from gcs.common._typed_config import ConfigError, field, from_mapping, load_yaml
 
@@ -33,10 +27,6 @@ __all__ = [
     "from_mapping",
     "join_thread",
     "kernel",
-    "kernel_sources",
     "load_yaml",
-    "missing_config_hint",
-    "refresh_numba_cache",
     "shipped_config",
-    "shipped_configs",
 ]

@@ -11,40 +11,25 @@ Modules:
                 team.
 """
 
-from gcs.config._links import ZENOH, GcsLinkConfig, LinkConfig, check_links, links_from_list
+from gcs.config._links import ZENOH, GcsLinkConfig, LinkConfig, check_links
 from gcs.config._team import (
-    AnalysisConfig,
-    ConfigError,
-    EdgeSpec,
-    FlightConfig,
     GuidanceConfig,
-    LimitsConfig,
     OperatorConfig,
-    PayloadConfig,
     SafetyConfig,
     Team,
     TeamConfig,
-    VehicleSpec,
     load_team,
 )
 
 __all__ = [
     "ZENOH",
-    "AnalysisConfig",
-    "ConfigError",
-    "EdgeSpec",
-    "FlightConfig",
     "GcsLinkConfig",
     "GuidanceConfig",
-    "LimitsConfig",
     "LinkConfig",
     "OperatorConfig",
-    "PayloadConfig",
     "SafetyConfig",
     "Team",
     "TeamConfig",
-    "VehicleSpec",
     "check_links",
-    "links_from_list",
     "load_team",
 ]

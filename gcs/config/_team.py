@@ -1,7 +1,7 @@
 """Team configuration: the shape, gains, limits, payload and airframe of one team.
 
 A team file (``configs/*.yaml``) is loaded into a frozen :class:`TeamConfig`
-and its shape into a :class:`~gcs.formation._graph.Formation`; every mistake is refused
+and its shape into a :class:`~gcs.formation.Formation`; every mistake is refused
 with one line naming the file, the field and what is wrong.
 
 Vehicle positions are in the team's body frame: x forward, y right (NED-like),

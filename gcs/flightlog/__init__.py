@@ -22,75 +22,19 @@ Modules:
                    is.
 """
 
-from gcs.flightlog._columns import CHUNK, decode_columns, wire_dtype
-from gcs.flightlog._flight import EARTH_RADIUS_M, ORIGIN_TOLERANCE_M, FlightLog, Track, tilt_angle
-from gcs.flightlog._metrics import FlightMetrics, swing_angle
-from gcs.flightlog._reader import LogError, TlogIndex, msg_id
-from gcs.flightlog._recorder import (
-    ARRAY_SPAN,
-    ARRAYS,
-    TeamHeader,
-    TlogRecorder,
-    chunked,
-    parse_team_header,
-    team_header,
-)
-from gcs.flightlog._report import (
-    FIGURES,
-    PAIRS_DRAWN,
-    PLOT_BUCKETS,
-    envelope,
-    vehicle_distances,
-    write_report,
-)
-from gcs.flightlog._scan import (
-    CHUNK_RECORDS,
-    CRC_EXTRA,
-    SCAN_FIELDS,
-    T_MAX_US,
-    T_MIN_US,
-    Scan,
-    map_file,
-    release_pages,
-    scan_buffer,
-    scan_records,
-)
+from gcs.flightlog._flight import FlightLog, Track, tilt_angle
+from gcs.flightlog._metrics import FlightMetrics
+from gcs.flightlog._reader import LogError, TlogIndex
+from gcs.flightlog._recorder import TlogRecorder
+from gcs.flightlog._report import write_report
 
 __all__ = [
-    "ARRAYS",
-    "ARRAY_SPAN",
-    "CHUNK",
-    "CHUNK_RECORDS",
-    "CRC_EXTRA",
-    "EARTH_RADIUS_M",
-    "FIGURES",
-    "ORIGIN_TOLERANCE_M",
-    "PAIRS_DRAWN",
-    "PLOT_BUCKETS",
-    "SCAN_FIELDS",
-    "T_MAX_US",
-    "T_MIN_US",
     "FlightLog",
     "FlightMetrics",
     "LogError",
-    "Scan",
-    "TeamHeader",
     "TlogIndex",
     "TlogRecorder",
     "Track",
-    "chunked",
-    "decode_columns",
-    "envelope",
-    "map_file",
-    "msg_id",
-    "parse_team_header",
-    "release_pages",
-    "scan_buffer",
-    "scan_records",
-    "swing_angle",
-    "team_header",
     "tilt_angle",
-    "vehicle_distances",
-    "wire_dtype",
     "write_report",
 ]

@@ -26,10 +26,10 @@ import numpy as np
 
 from gcs.flightlog._columns import decode_columns
 from gcs.flightlog._metrics import FlightMetrics
-from gcs.flightlog._reader import TlogIndex, msg_id
+from gcs.flightlog._reader import TlogIndex
 from gcs.flightlog._recorder import ARRAY_SPAN, ARRAYS, TeamHeader, chunked, parse_team_header
 from gcs.loop import Phase
-from gcs.wire import SAFETY_ARMED, heartbeat_mode_text, mavlink
+from gcs.wire import SAFETY_ARMED, heartbeat_mode_text, mavlink, message_id
 
 __all__ = ["EARTH_RADIUS_M", "ORIGIN_TOLERANCE_M", "FlightLog", "Track", "tilt_angle"]
 
@@ -414,7 +414,7 @@ def _read_tracks(index: TlogIndex, ground: set[int],
         if len((fix := _global_positions(index, sysid, comp))[0]):
             fixes[sysid] = fix
     frame = _team_frame(local, fixes)
-    wanted = np.isin(index.msgid, [msg_id(name) for name in _TRACK_MESSAGES])
+    wanted = np.isin(index.msgid, [message_id(name) for name in _TRACK_MESSAGES])
     counts = np.bincount(index.sysid[wanted], minlength=256)
     total, done = int(sum(counts[s] for s in vehicles)), 0
     nowhere = (np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)))

@@ -24,9 +24,9 @@ from pathlib import Path
 import numpy as np
 
 from gcs.flightlog._scan import map_file, scan_buffer
-from gcs.wire import MavMessage, mavlink
+from gcs.wire import MavMessage, mavlink, message_id
 
-__all__ = ["LogError", "TlogIndex", "msg_id"]
+__all__ = ["LogError", "TlogIndex"]
 
 #: A record more than this away from its neighbours' times has a damaged stamp, s.
 TIME_JUMP_S = 2.0
@@ -99,7 +99,7 @@ class TlogIndex:
 
     def select(self, name: str, *, sysid: int | None = None) -> np.ndarray:
         """Record numbers of every message called ``name`` (from ``sysid`` if given)."""
-        mask = self.msgid == msg_id(name)
+        mask = self.msgid == message_id(name)
         if sysid is not None:
             mask &= self.sysid == sysid
         return np.flatnonzero(mask)
@@ -138,14 +138,6 @@ class TlogIndex:
         keys, group = np.unique(stream, return_inverse=True)
         lost = np.bincount(group[1:], weights=gaps, minlength=len(keys))
         return {(int(k) >> 8, int(k) & 0xFF): int(n) for k, n in zip(keys, lost, strict=True)}
-
-
-def msg_id(name: str) -> int:
-    """The dialect's id of message ``name``; ValueError for a name it does not know."""
-    value = getattr(mavlink, f"MAVLINK_MSG_ID_{name.upper()}", None)
-    if not isinstance(value, int):
-        raise ValueError(f"unknown MAVLink message {name!r}")
-    return value
 
 
 def _time_jumps(t: np.ndarray) -> np.ndarray:

@@ -9,34 +9,13 @@ Modules:
     ``_motion``  Rigid motions of the team synthesised as distance disagreements.
 """
 
-from gcs.formation._graph import (
-    Formation,
-    FormationError,
-    build_formation,
-    incidence_matrix,
-    is_infinitesimally_rigid,
-    realize_positions,
-    rigidity_matrix,
-)
-from gcs.formation._motion import (
-    MotionBasis,
-    centripetal_matrix,
-    edges_to_slots,
-    local_pseudoinverse,
-    motion_basis,
-)
+from gcs.formation._graph import Formation, FormationError, build_formation
+from gcs.formation._motion import MotionBasis, motion_basis
 
 __all__ = [
     "Formation",
     "FormationError",
     "MotionBasis",
     "build_formation",
-    "centripetal_matrix",
-    "edges_to_slots",
-    "incidence_matrix",
-    "is_infinitesimally_rigid",
-    "local_pseudoinverse",
     "motion_basis",
-    "realize_positions",
-    "rigidity_matrix",
 ]

@@ -11,25 +11,11 @@ Modules:
               as loops.
 """
 
-from gcs.guidance._law import (
-    Guidance,
-    MotionDemand,
-    RelativeMeasurements,
-    formation_acceleration,
-    relative_measurements,
-    saturate,
-)
-from gcs.guidance._udi import finite_max_norm, local_frames, to_ned_saturated, udi
+from gcs.guidance._law import Guidance, MotionDemand
+from gcs.guidance._udi import finite_max_norm
 
 __all__ = [
     "Guidance",
     "MotionDemand",
-    "RelativeMeasurements",
     "finite_max_norm",
-    "formation_acceleration",
-    "local_frames",
-    "relative_measurements",
-    "saturate",
-    "to_ned_saturated",
-    "udi",
 ]

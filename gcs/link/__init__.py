@@ -35,26 +35,19 @@ Modules:
     ``_profiles``           Choosing an autopilot profile by its configured name.
 """
 
-from gcs.link._discovery import Discovery, Presence, PresenceEvent, PresenceSource
-from gcs.link._errors import CommandAck, CommandError, CommandResult, LinkError
+from gcs.link._discovery import Presence, PresenceEvent
+from gcs.link._errors import CommandAck, CommandError, LinkError
 from gcs.link._fanout import Fanout
-from gcs.link._health import LinkHealth, SequenceTracker
-from gcs.link._link import DEFAULT_TELEMETRY_RATES_HZ, Link
+from gcs.link._health import LinkHealth
+from gcs.link._link import Link
 from gcs.link._manager import LinkManager
-from gcs.link._profile import AutopilotProfile, ProfileBase, ProfileName
-from gcs.link._profile_ardupilot import ArduPilotProfile, VerticalPd
-from gcs.link._profile_px4 import Px4Profile
-from gcs.link._profile_sim import SimProfile
+from gcs.link._profile import AutopilotProfile
 from gcs.link._profiles import make_profile
 
 __all__ = [
-    "DEFAULT_TELEMETRY_RATES_HZ",
-    "ArduPilotProfile",
     "AutopilotProfile",
     "CommandAck",
     "CommandError",
-    "CommandResult",
-    "Discovery",
     "Fanout",
     "Link",
     "LinkError",
@@ -62,12 +55,5 @@ __all__ = [
     "LinkManager",
     "Presence",
     "PresenceEvent",
-    "PresenceSource",
-    "ProfileBase",
-    "ProfileName",
-    "Px4Profile",
-    "SequenceTracker",
-    "SimProfile",
-    "VerticalPd",
     "make_profile",
 ]

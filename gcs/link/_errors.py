@@ -1,8 +1,8 @@
 """Command outcomes and the errors a link raises, each naming the vehicle.
 
-A ``COMMAND_LONG`` ends in a :class:`CommandResult`: one of MAVLink's
-``MAV_RESULT`` values, or :attr:`CommandResult.TIMEOUT` when no
-``COMMAND_ACK`` came back after all retries. Anything but ``ACCEPTED`` raises
+A ``COMMAND_LONG`` ends in a :class:`gcs.wire.CommandResult`: one of MAVLink's
+``MAV_RESULT`` values, or ``TIMEOUT`` when no ``COMMAND_ACK`` came back after
+all retries. Anything but ``ACCEPTED`` raises
 :class:`CommandError`, a ``RuntimeError`` whose text names the vehicle, the
 command and the outcome.
 """
@@ -10,60 +10,10 @@ command and the outcome.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from enum import IntEnum
 
-from gcs.wire import command_name
+from gcs.wire import CommandResult, command_name
 
-__all__ = ["CommandAck", "CommandError", "CommandResult", "LinkError"]
-
-
-class CommandResult(IntEnum):
-    """Outcome of a command: ``MAV_RESULT`` values plus TIMEOUT and UNKNOWN."""
-
-    ACCEPTED = 0
-    TEMPORARILY_REJECTED = 1
-    DENIED = 2
-    UNSUPPORTED = 3
-    FAILED = 4
-    IN_PROGRESS = 5
-    CANCELLED = 6
-    COMMAND_LONG_ONLY = 7
-    COMMAND_INT_ONLY = 8
-    UNSUPPORTED_MAV_FRAME = 9
-    UNKNOWN = 254
-    """A ``MAV_RESULT`` value this GCS does not know."""
-    TIMEOUT = 255
-    """No COMMAND_ACK arrived (not a MAVLink value)."""
-
-    @classmethod
-    def from_wire(cls, value: int) -> CommandResult:
-        """Result from a ``COMMAND_ACK.result`` field."""
-        try:
-            result = cls(value)
-        except ValueError:
-            return cls.UNKNOWN
-        return cls.UNKNOWN if result in (cls.TIMEOUT, cls.UNKNOWN) else result
-
-    @property
-    def text(self) -> str:
-        """What the outcome means, for operators."""
-        return _RESULT_TEXT[self]
-
-
-_RESULT_TEXT = {
-    CommandResult.ACCEPTED: "accepted",
-    CommandResult.TEMPORARILY_REJECTED: "temporarily rejected, try again later",
-    CommandResult.DENIED: "denied by the vehicle",
-    CommandResult.UNSUPPORTED: "not supported by the vehicle",
-    CommandResult.FAILED: "failed on the vehicle",
-    CommandResult.IN_PROGRESS: "in progress",
-    CommandResult.CANCELLED: "cancelled",
-    CommandResult.COMMAND_LONG_ONLY: "only accepted as COMMAND_LONG",
-    CommandResult.COMMAND_INT_ONLY: "only accepted as COMMAND_INT",
-    CommandResult.UNSUPPORTED_MAV_FRAME: "frame not supported",
-    CommandResult.UNKNOWN: "answered with an unknown result",
-    CommandResult.TIMEOUT: "got no COMMAND_ACK",
-}
+__all__ = ["CommandAck", "CommandError", "LinkError"]
 
 
 @dataclass(frozen=True)

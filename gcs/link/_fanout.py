@@ -1,10 +1,10 @@
 """One frame to each of many links at once: the loop's setpoints for a whole fleet.
 
 Why: sent link by link (each frame numbered and checksummed by its link's
-encoder, :meth:`~gcs.wire._encoder.MavlinkEncoder.restamp`), a hundred
+encoder, :meth:`~gcs.wire.MavlinkEncoder.restamp`), a hundred
 setpoints cost the loop about 1.7 ms, three quarters of it Python around the
 zenoh publications; numbered and checksummed in one compiled pass
-(:class:`~gcs.wire._encoder.EncoderBatch`) and published in one loop, 0.45-0.6 ms,
+(:class:`~gcs.wire.EncoderBatch`) and published in one loop, 0.45-0.6 ms,
 of which the hundred zenoh publications are 0.3 ms (bench/gcs_tick.py). The
 frames are the ones each link would send on its own: same sequence numbers,
 signatures, frame listeners (the recorder) and errors.
@@ -30,7 +30,7 @@ class Fanout:
     """Sends row ``i`` of a packed array to ``links[i]``, for a fixed list of links.
 
     While it sends it holds every link's send lock (links opened by one
-    :class:`~gcs.link._manager.LinkManager` share one), so no other frame of
+    :class:`~gcs.link.LinkManager` share one), so no other frame of
     those links can come between numbering and sending: the vehicles see no
     gap or reordering in the GCS's sequence numbers.
     """

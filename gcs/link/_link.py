@@ -33,9 +33,9 @@ from gcs.wire import (
     FrameDecoder,
     MavlinkEncoder,
     MavMessage,
-    Record,
     SigningKey,
     Telemetry,
+    TelemetryRecord,
     TelemetryStore,
     accel_setpoint_fields,
     mavlink,
@@ -125,7 +125,7 @@ class Link:
         # Links that a Fanout sends to together share one (see LinkManager).
         self._send_lock = send_lock if send_lock is not None else threading.Lock()
         self._message_listeners: list[Callable[[MavMessage], None]] = []
-        self._record_listeners: list[Callable[[Record], None]] = []
+        self._record_listeners: list[Callable[[TelemetryRecord], None]] = []
         self._frame_listeners: list[Callable[[FrameDirection, bytes], None]] = []
         self._pause: Callable[[], bool] | None = None
         self._stop = threading.Event()
@@ -260,7 +260,7 @@ class Link:
 
         Why: in lockstep with the simulator the waits of phase actions must end
         at ticks, not at whatever wall time a message happens to arrive
-        (:class:`gcs.loop._stepgate.StepGate`). ``pause`` answering False falls back to
+        (:class:`gcs.loop.StepGate`). ``pause`` answering False falls back to
         waiting on the link, as when none is set.
         """
         self._pause = pause
@@ -271,7 +271,7 @@ class Link:
         """Call ``callback(msg)`` for every message from the vehicle (on the receive thread)."""
         self._message_listeners.append(callback)
 
-    def add_record_listener(self, callback: Callable[[Record], None]) -> None:
+    def add_record_listener(self, callback: Callable[[TelemetryRecord], None]) -> None:
         """Call ``callback(record)`` with every new telemetry record (on the receive thread).
 
         Why: a fleet-wide table kept current here lets the loop read a hundred
@@ -285,7 +285,7 @@ class Link:
         Incoming frames from other system ids are included (a recorder wants them).
         Outgoing frames are handed over under the send lock, so a recorder sees
         them in sequence order; that lock is shared by the links of one
-        :class:`~gcs.link._manager.LinkManager`, so the callback must be quick and
+        :class:`~gcs.link.LinkManager`, so the callback must be quick and
         must never send (it would wait for the lock it runs under).
         """
         self._frame_listeners.append(callback)
@@ -421,7 +421,7 @@ class Link:
         now = self._clock()
         replies: list[MavMessage] = []
         mine: list[MavMessage] = []
-        records: list[Record] = []
+        records: list[TelemetryRecord] = []
         with self._cond:
             for msg in messages:
                 if self._accept(msg, now, replies, records):
@@ -443,7 +443,7 @@ class Link:
                 break  # closed meanwhile
 
     def _accept(self, msg: MavMessage, now: float, replies: list[MavMessage],
-                records: list[Record]) -> bool:
+                records: list[TelemetryRecord]) -> bool:
         """Account one message under the lock; False if it is not from the vehicle."""
         src = msg.get_srcSystem()
         if src != self._sysid:

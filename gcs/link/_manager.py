@@ -1,6 +1,6 @@
 """All of the GCS's links, opened from configuration and closed together.
 
-:class:`LinkManager` builds one transport, :class:`~gcs.link._link.Link` and
+:class:`LinkManager` builds one transport, :class:`~gcs.link.Link` and
 autopilot profile per configured vehicle, shares one zenoh session among the
 zenoh links, and feeds :class:`~gcs.link._discovery.Discovery` from zenoh
 liveliness tokens and from the links' heartbeats. A vehicle heard for the

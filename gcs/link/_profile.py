@@ -2,7 +2,7 @@
 
 The GCS loop is the same for every vehicle; what differs between the
 simulated vehicles, PX4 and ArduPilot is the order of commands and the
-setpoint channels. A profile is bound to one :class:`~gcs.link._link.Link`.
+setpoint channels. A profile is bound to one :class:`~gcs.link.Link`.
 Every step waits for ``COMMAND_ACK`` (with the link's retries) and then for
 the HEARTBEAT to confirm the new state, so a call that returns has happened.
 All methods block; run them off the 4 Hz loop's thread.
@@ -103,7 +103,7 @@ class AutopilotProfile(Protocol):
         acceleration (m/s^2) of the profile's own altitude loop for acceleration
         only. Called once per setpoint sent (unless :attr:`vertical_is_z`): the
         loop packs a whole fleet's setpoints at once and sends them with
-        :class:`~gcs.link._fanout.Fanout`.
+        :class:`~gcs.link.Fanout`.
         """
         ...
 

@@ -33,8 +33,8 @@ from gcs.wire import (
     CopterMode,
     Heartbeat,
     LocalPosition,
-    Record,
     SetpointKind,
+    TelemetryRecord,
     copter_mode_text,
     mavlink,
     unpack_v2,
@@ -154,7 +154,7 @@ class ArduPilotProfile(ProfileBase):
             with self._lock:
                 self._accel_xy = (float(msg.afx), float(msg.afy))
 
-    def _on_record(self, record: Record) -> None:
+    def _on_record(self, record: TelemetryRecord) -> None:
         """A new position while the GCS streams: a setpoint with ``afz`` from it (receive
         thread)."""
         if isinstance(record, Heartbeat):

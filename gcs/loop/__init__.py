@@ -22,41 +22,22 @@ Modules:
 
 from gcs.loop._clock import Clock, ClockStoppedError, ExternalClock, WallClock
 from gcs.loop._fleet import FleetState, FleetTable
-from gcs.loop._gamepad import (
-    AXES_RETRY_S,
-    MAX_FAULTS_REPORTED,
-    AxisMap,
-    Gamepad,
-    GamepadAxes,
-    GamepadButtons,
-    GamepadConfig,
-    GamepadMapper,
-    load_gamepad_config,
-)
-from gcs.loop._operator import OperatorCommand, OperatorSnapshot, shape_stick
-from gcs.loop._phases import Action, Phase, PhaseError, next_phase
-from gcs.loop._runtime import Event, FlightRecorder, Runtime, RuntimeSnapshot, TickStats
-from gcs.loop._safety import SafetyEvent, SafetyReason, SafetyVerdict, evaluate, rule_flags
+from gcs.loop._gamepad import Gamepad, load_gamepad_config
+from gcs.loop._operator import OperatorCommand, OperatorSnapshot
+from gcs.loop._phases import Action, Phase, PhaseError
+from gcs.loop._runtime import Runtime, RuntimeSnapshot, TickStats
+from gcs.loop._safety import SafetyReason
 from gcs.loop._stepgate import HOLD_CAP_S, GatedClock, StepGate
 
 __all__ = [
-    "AXES_RETRY_S",
     "HOLD_CAP_S",
-    "MAX_FAULTS_REPORTED",
     "Action",
-    "AxisMap",
     "Clock",
     "ClockStoppedError",
-    "Event",
     "ExternalClock",
     "FleetState",
     "FleetTable",
-    "FlightRecorder",
     "Gamepad",
-    "GamepadAxes",
-    "GamepadButtons",
-    "GamepadConfig",
-    "GamepadMapper",
     "GatedClock",
     "OperatorCommand",
     "OperatorSnapshot",
@@ -64,15 +45,9 @@ __all__ = [
     "PhaseError",
     "Runtime",
     "RuntimeSnapshot",
-    "SafetyEvent",
     "SafetyReason",
-    "SafetyVerdict",
     "StepGate",
     "TickStats",
     "WallClock",
-    "evaluate",
     "load_gamepad_config",
-    "next_phase",
-    "rule_flags",
-    "shape_stick",
 ]

@@ -19,7 +19,7 @@ import numpy as np
 
 from gcs.common import kernel
 from gcs.link import AutopilotProfile
-from gcs.wire import Attitude, Heartbeat, LocalPosition, Record, SystemStatus
+from gcs.wire import Attitude, Heartbeat, LocalPosition, SystemStatus, TelemetryRecord
 
 __all__ = ["FleetState", "FleetTable"]
 
@@ -85,7 +85,7 @@ class FleetTable:
                 if record is not None:
                     self._write(i, profile, record)
 
-    def _write(self, i: int, profile: AutopilotProfile, record: Record) -> None:
+    def _write(self, i: int, profile: AutopilotProfile, record: TelemetryRecord) -> None:
         """One record into row ``i``; an older record than the row holds is ignored."""
         rows = self._rows
         if isinstance(record, LocalPosition):

@@ -2,7 +2,7 @@
 
 The paper's operator flew the team with a gamepad; here it is read through
 pygame/SDL on the GCS machine and written to the same
-:class:`~gcs.loop._operator.OperatorCommand` as the browser (source ``"gamepad"``).
+:class:`~gcs.loop.OperatorCommand` as the browser (source ``"gamepad"``).
 The mapping from SDL axis and button numbers is a YAML file
 (``configs/gamepad.yaml``), so any pad works without code changes.
 

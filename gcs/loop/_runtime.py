@@ -1,8 +1,8 @@
 """The GCS loop: operator sticks in, one acceleration setpoint per vehicle out, at 4 Hz.
 
-Each tick (scheduled on a :class:`~gcs.loop._clock.Clock`, wall or simulator time):
+Each tick (scheduled on a :class:`~gcs.loop.Clock`, wall or simulator time):
 
-1. read the fleet's latest telemetry (:class:`gcs.loop._fleet.FleetTable`);
+1. read the fleet's latest telemetry (:class:`gcs.loop.FleetTable`);
 2. apply the safety rules (:func:`gcs.loop._safety.evaluate`): freeze the motion or
    land the team;
 3. take the operator's command, run the guidance (relative positions, own

@@ -17,20 +17,13 @@ Modules:
 """
 
 from gcs.transport._arrivals import Arrivals
-from gcs.transport._mavutil_transport import (
-    DATAGRAM_PREFIXES,
-    STREAM_PREFIXES,
-    MavutilTransport,
-    is_connection_string,
-)
+from gcs.transport._mavutil_transport import MavutilTransport, is_connection_string
 from gcs.transport._protocol import FrameDirection, Transport
-from gcs.transport._zenoh_session import DEFAULT_ENDPOINT, ZenohSettings, open_session, zenoh_config
+from gcs.transport._zenoh_session import DEFAULT_ENDPOINT, ZenohSettings, open_session
 from gcs.transport._zenoh_transport import FleetReceiver, ZenohTransport, declare_alive, watch_alive
 
 __all__ = [
-    "DATAGRAM_PREFIXES",
     "DEFAULT_ENDPOINT",
-    "STREAM_PREFIXES",
     "Arrivals",
     "FleetReceiver",
     "FrameDirection",
@@ -42,5 +35,4 @@ __all__ = [
     "is_connection_string",
     "open_session",
     "watch_alive",
-    "zenoh_config",
 ]

@@ -45,7 +45,7 @@ def is_connection_string(text: str) -> bool:
 
 
 class MavutilTransport:
-    """A :class:`~gcs.transport._protocol.Transport` on a pymavlink connection it owns."""
+    """A :class:`~gcs.transport.Transport` on a pymavlink connection it owns."""
 
     def __init__(self, connection: str, *, baud: int = 57600, poll_s: float = 0.05) -> None:
         if not is_connection_string(connection):

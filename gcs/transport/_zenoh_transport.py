@@ -76,14 +76,14 @@ class FleetReceiver:
         """Block until the registered vehicles' payloads counted in ``sent`` are all handled.
 
         ``sent``: payloads each system id has published so far (a lockstep sim's
-        clock sample, :func:`gcs.wire._clockwire.decode_clock`); see
-        :meth:`gcs.transport._arrivals.Arrivals.wait`.
+        clock sample, :func:`gcs.wire.decode_clock`); see
+        :meth:`gcs.transport.Arrivals.wait`.
         """
         return self._arrivals.wait(sent, timeout_s, only=lambda s: s in self._handlers)
 
 
 class ZenohTransport:
-    """A :class:`~gcs.transport._protocol.Transport` over one zenoh session (shared, not owned)."""
+    """A :class:`~gcs.transport.Transport` over one zenoh session (shared, not owned)."""
 
     def __init__(self, session: zenoh.Session, *, tx_key: str, rx_key: str,
                  description: str | None = None,

@@ -30,26 +30,18 @@ Modules:
                     the sim.
 """
 
-from gcs.wire import keys
-from gcs.wire._clockwire import (
-    CLOCK_FORMAT,
-    ClockSample,
-    decode_clock,
-    decode_time,
-    encode_clock,
-    encode_time,
-)
-from gcs.wire._crc import frame_crc
+import importlib
+from types import ModuleType
+
+from gcs.wire._clockwire import decode_clock, decode_time, encode_clock, encode_time
 from gcs.wire._decoder import DecodeStats, FrameDecoder
-from gcs.wire._dialect import MavMessage, command_name, mavlink, message_id, message_name
+from gcs.wire._dialect import MavMessage, command_name, mavlink, message_id
 from gcs.wire._encoder import (
     DEFAULT_GCS_COMPONENT_ID,
     DEFAULT_GCS_SYSTEM_ID,
     EncoderBatch,
     MavlinkEncoder,
     distinct_rows,
-    frame_dtype,
-    packed_rows,
 )
 from gcs.wire._modes import (
     CUSTOM_MODE_ENABLED,
@@ -60,92 +52,66 @@ from gcs.wire._modes import (
     SimMode,
     copter_mode_text,
     heartbeat_mode_text,
-    px4_custom_mode,
     px4_mode_text,
     sim_mode_text,
     split_px4_custom_mode,
 )
+from gcs.wire._results import CommandResult
 from gcs.wire._setpoints import (
-    MASK_ACCEL,
-    MASK_ACCEL_XY_POS_Z,
     SETPOINT_MESSAGE,
     AccelSetpoint,
     SetpointKind,
     SetpointPacker,
     TypeMask,
     accel_setpoint_fields,
-    accel_setpoint_message,
-    packed_setpoints,
     read_setpoint,
 )
-from gcs.wire._signing import (
-    SIGNATURE_LEN,
-    SignatureCheck,
-    SignatureVerifier,
-    SigningKey,
-    load_signing_key,
-    parse_signing_key,
-    signature,
-    signing_timestamp,
-    write_signing_key,
-)
+from gcs.wire._signing import SigningKey, load_signing_key
 from gcs.wire._simtruth import SimTruth, vec3
-from gcs.wire._stamp import crc_accumulate, stamp_frames
+from gcs.wire._stamp import crc_accumulate
 from gcs.wire._telemetry import (
     Attitude,
     Heartbeat,
-    Imu,
     LocalPosition,
-    Record,
     Severity,
-    StatusText,
     SystemStatus,
     Telemetry,
+    TelemetryRecord,
     TelemetryStore,
 )
-from gcs.wire._unpack import HEADER_V2, unpack_v2
+from gcs.wire._unpack import unpack_v2
 
 __all__ = [
-    "CLOCK_FORMAT",
     "CUSTOM_MODE_ENABLED",
     "DEFAULT_GCS_COMPONENT_ID",
     "DEFAULT_GCS_SYSTEM_ID",
-    "HEADER_V2",
-    "MASK_ACCEL",
-    "MASK_ACCEL_XY_POS_Z",
     "SAFETY_ARMED",
     "SETPOINT_MESSAGE",
-    "SIGNATURE_LEN",
     "AccelSetpoint",
     "Attitude",
-    "ClockSample",
+    "CommandResult",
     "CopterMode",
     "DecodeStats",
     "EncoderBatch",
     "FrameDecoder",
     "Heartbeat",
-    "Imu",
     "LocalPosition",
     "MavMessage",
     "MavlinkEncoder",
     "Px4AutoSubMode",
     "Px4MainMode",
-    "Record",
     "SetpointKind",
     "SetpointPacker",
     "Severity",
-    "SignatureCheck",
-    "SignatureVerifier",
     "SigningKey",
     "SimMode",
     "SimTruth",
-    "StatusText",
     "SystemStatus",
     "Telemetry",
+    "TelemetryRecord",
     "TelemetryStore",
     "TypeMask",
     "accel_setpoint_fields",
-    "accel_setpoint_message",
     "command_name",
     "copter_mode_text",
     "crc_accumulate",
@@ -154,26 +120,24 @@ __all__ = [
     "distinct_rows",
     "encode_clock",
     "encode_time",
-    "frame_crc",
-    "frame_dtype",
     "heartbeat_mode_text",
     "keys",
     "load_signing_key",
     "mavlink",
     "message_id",
-    "message_name",
-    "packed_rows",
-    "packed_setpoints",
-    "parse_signing_key",
-    "px4_custom_mode",
     "px4_mode_text",
     "read_setpoint",
-    "signature",
-    "signing_timestamp",
     "sim_mode_text",
     "split_px4_custom_mode",
-    "stamp_frames",
     "unpack_v2",
     "vec3",
-    "write_signing_key",
 ]
+
+_PUBLIC_MODULES = ("keys",)
+
+
+def __getattr__(name: str) -> ModuleType:
+    """Public modules load on first use, not with the package."""
+    if name in _PUBLIC_MODULES:
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -119,7 +119,7 @@ def accel_setpoint_fields(*, target_system: int, target_component: int, time_boo
     ``z_ned`` (m, down) selects :data:`MASK_ACCEL_XY_POS_Z`; ``az_ned`` (m/s^2,
     down, gravity excluded) selects :data:`MASK_ACCEL`. Returns the field values
     in wire order (``SETPOINT_MESSAGE.ordered_fieldnames``), for
-    :meth:`gcs.wire._encoder.MavlinkEncoder.encode_fields`.
+    :meth:`gcs.wire.MavlinkEncoder.encode_fields`.
     """
     if (z_ned is None) == (az_ned is None):
         raise ValueError("give exactly one vertical channel: z_ned or az_ned")
@@ -139,7 +139,7 @@ def packed_setpoints(*, target_system: np.ndarray, target_component: np.ndarray,
                      time_boot_ms: np.ndarray, accel_xy_ned: np.ndarray, vertical: np.ndarray,
                      kind: np.ndarray) -> np.ndarray:
     """A fleet's setpoints packed at once, one per row (:func:`~gcs.wire._encoder.packed_rows`),
-    for :class:`~gcs.link._fanout.Fanout`.
+    for :class:`~gcs.link.Fanout`.
 
     Per vehicle: ``accel_xy_ned`` (n, 2) m/s^2, ``vertical`` (n,) the z (m, down)
     or the down acceleration (m/s^2) as the ``kind`` (n,) type mask says

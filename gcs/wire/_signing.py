@@ -138,7 +138,7 @@ class SignatureCheck(Enum):
 class SignatureVerifier:
     """Checks signatures of incoming frames against one key, tracking per-stream timestamps.
 
-    Not thread-safe: owned by one :class:`~gcs.wire._decoder.FrameDecoder`.
+    Not thread-safe: owned by one :class:`~gcs.wire.FrameDecoder`.
     """
 
     def __init__(self, key: SigningKey, *, wall_clock: Callable[[], float] = time.time) -> None:

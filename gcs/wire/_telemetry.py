@@ -22,11 +22,11 @@ __all__ = [
     "Heartbeat",
     "Imu",
     "LocalPosition",
-    "Record",
     "Severity",
     "StatusText",
     "SystemStatus",
     "Telemetry",
+    "TelemetryRecord",
     "TelemetryStore",
 ]
 
@@ -134,7 +134,7 @@ class StatusText:
     received_at: float
 
 
-Record = Heartbeat | LocalPosition | Attitude | Imu | SystemStatus | StatusText
+TelemetryRecord = Heartbeat | LocalPosition | Attitude | Imu | SystemStatus | StatusText
 """Any one telemetry record."""
 
 
@@ -163,7 +163,7 @@ class TelemetryStore:
         self.imu: Imu | None = None
         self.status: SystemStatus | None = None
         self._texts: deque[StatusText] = deque(maxlen=status_text_history)
-        self._handlers: dict[str, Callable[[MavMessage, float], Record]] = {
+        self._handlers: dict[str, Callable[[MavMessage, float], TelemetryRecord]] = {
             "HEARTBEAT": self._heartbeat,
             "LOCAL_POSITION_NED": self._position,
             "ATTITUDE": self._attitude,
@@ -173,7 +173,7 @@ class TelemetryStore:
             "STATUSTEXT": self._status_text,
         }
 
-    def update(self, msg: MavMessage, now: float) -> Record | None:
+    def update(self, msg: MavMessage, now: float) -> TelemetryRecord | None:
         """Take ``msg`` if it is telemetry; the new record, or None if ``msg`` is not one."""
         handler = self._handlers.get(msg.get_type())
         return None if handler is None else handler(msg, now)

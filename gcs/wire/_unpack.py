@@ -3,7 +3,7 @@
 Why: the GCS decodes every telemetry frame of every vehicle (a hundred
 vehicles send thousands per second), and pymavlink's generic ``decode``
 re-parses the header, re-computes the checksum the
-:class:`~gcs.wire._decoder.FrameDecoder` has already checked and walks the
+:class:`~gcs.wire.FrameDecoder` has already checked and walks the
 field list in Python each time. For message types whose fields are all
 scalars (no arrays, no strings; most telemetry), the payload maps straight
 onto the type's ``struct`` and its constructor; the object built is the one

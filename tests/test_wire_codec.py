@@ -10,8 +10,6 @@ from pymavlink.dialects.v20 import ardupilotmega as v20
 
 from gcs.wire import (
     DEFAULT_GCS_SYSTEM_ID,
-    MASK_ACCEL,
-    MASK_ACCEL_XY_POS_Z,
     SETPOINT_MESSAGE,
     EncoderBatch,
     FrameDecoder,
@@ -20,11 +18,14 @@ from gcs.wire import (
     SetpointPacker,
     SigningKey,
     accel_setpoint_fields,
-    accel_setpoint_message,
-    frame_dtype,
-    packed_rows,
-    packed_setpoints,
     read_setpoint,
+)
+from gcs.wire._encoder import frame_dtype, packed_rows
+from gcs.wire._setpoints import (
+    MASK_ACCEL,
+    MASK_ACCEL_XY_POS_Z,
+    accel_setpoint_message,
+    packed_setpoints,
 )
 
 

@@ -14,13 +14,10 @@ from pymavlink.dialects.v20 import ardupilotmega as v20
 from gcs.common import ConfigError
 from gcs.link import Link
 from gcs.transport import MavutilTransport
-from gcs.wire import (
-    FrameDecoder,
-    MavlinkEncoder,
+from gcs.wire import FrameDecoder, MavlinkEncoder, SigningKey, load_signing_key
+from gcs.wire._signing import (
     SignatureCheck,
     SignatureVerifier,
-    SigningKey,
-    load_signing_key,
     signing_timestamp,
     write_signing_key,
 )
