@@ -227,3 +227,9 @@ def test_importing_the_packages_does_no_work() -> None:
     calls, touched, before, after = out.stdout.splitlines()
     assert (calls, touched, before) == ("0", "[]", "[]")
     assert after == "['gcs']"
+
+
+def test_public_modules_load_on_first_use() -> None:
+    """``import web`` does not load the test viewer, nor ``import vehicles`` the endpoint."""
+    assert not {"web.wireviewer", "vehicles.endpoint"} & _loaded_after("import web, vehicles")
+    assert "web.wireviewer" in _loaded_after("import web\nweb.wireviewer")

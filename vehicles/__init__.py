@@ -39,9 +39,7 @@ Modules:
                          commands, setpoints, telemetry.
 """
 
-import importlib
-from types import ModuleType
-
+from gcs.common import lazy_modules
 from vehicles._airframe import BEBOP2, Airframe, load_airframe
 from vehicles._autopilot import Autopilot
 from vehicles._config import AutopilotConfig, load_autopilot_config
@@ -71,11 +69,4 @@ __all__ = [
     "rotor_layout",
 ]
 
-_PUBLIC_MODULES = ("endpoint",)
-
-
-def __getattr__(name: str) -> ModuleType:
-    """Public modules load on first use, not with the package."""
-    if name in _PUBLIC_MODULES:
-        return importlib.import_module(f"{__name__}.{name}")
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = lazy_modules(__name__, ("endpoint",))

@@ -38,9 +38,7 @@ Modules:
                          decodes what it gets.
 """
 
-import importlib
-from types import ModuleType
-
+from gcs.common import lazy_modules
 from web._frame import TeamView, build_frame
 from web._launch import run_demo, run_gcs
 from web._quadmesh import quad_mesh
@@ -64,11 +62,4 @@ __all__ = [
     "wireviewer",
 ]
 
-_PUBLIC_MODULES = ("palette", "wireviewer",)
-
-
-def __getattr__(name: str) -> ModuleType:
-    """Public modules load on first use, not with the package."""
-    if name in _PUBLIC_MODULES:
-        return importlib.import_module(f"{__name__}.{name}")
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = lazy_modules(__name__, ("palette", "wireviewer"))

@@ -8,6 +8,8 @@ against their sources the first time one is built.
 Modules:
 
     ``_jit_cache``     Compiled kernels whose numba disk cache stays honest across files.
+    ``_lazy``          Public modules of a package that load on first use, not with the
+                       package.
     ``_shipped``       Where the configs shipped with the project are, in a checkout and
                        once installed.
     ``_threads``       Stopping a thread and saying so when it will not stop.
@@ -15,6 +17,7 @@ Modules:
 """
 
 from gcs.common._jit_cache import kernel
+from gcs.common._lazy import lazy_modules
 from gcs.common._shipped import LOCAL_CONFIGS, default_config, shipped_config
 from gcs.common._threads import join_thread
 from gcs.common._typed_config import ConfigError, field, from_mapping, load_yaml
@@ -27,6 +30,7 @@ __all__ = [
     "from_mapping",
     "join_thread",
     "kernel",
+    "lazy_modules",
     "load_yaml",
     "shipped_config",
 ]

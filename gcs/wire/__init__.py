@@ -30,9 +30,7 @@ Modules:
                     the sim.
 """
 
-import importlib
-from types import ModuleType
-
+from gcs.common import lazy_modules
 from gcs.wire._clockwire import decode_clock, decode_time, encode_clock, encode_time
 from gcs.wire._decoder import DecodeStats, FrameDecoder
 from gcs.wire._dialect import MavMessage, command_name, mavlink, message_id
@@ -133,11 +131,4 @@ __all__ = [
     "vec3",
 ]
 
-_PUBLIC_MODULES = ("keys",)
-
-
-def __getattr__(name: str) -> ModuleType:
-    """Public modules load on first use, not with the package."""
-    if name in _PUBLIC_MODULES:
-        return importlib.import_module(f"{__name__}.{name}")
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = lazy_modules(__name__, ("keys",))
