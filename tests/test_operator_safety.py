@@ -10,7 +10,7 @@ import pytest
 from gcs.config import OperatorConfig, SafetyConfig, load_team
 from gcs.loop import OperatorCommand
 from gcs.loop._operator import shape_stick
-from gcs.loop._safety import DEFORMED, LOST, OUTSIDE, STALE, SafetyReason, evaluate, rule_flags
+from gcs.loop._safety import DEFORMED, LOST, STALE, SafetyReason, evaluate, rule_flags
 
 OP = OperatorConfig(deadzone=0.1, expo=0.5, stick_timeout=1.0, altitude_rate=0.5,
                     altitude_max=3.0, altitude_step=0.25)
@@ -95,23 +95,25 @@ def test_lost_vehicle_lands_the_team() -> None:
     assert "never heard from" in v.events[0].text
 
 
-def test_geofence() -> None:
+def test_the_geofence_is_not_a_freeze_rule() -> None:
+    """The fence limits the motion (gcs.loop._geofence): freezing every stick left a team
+    at the fence no way back."""
     p = SQUARE.copy()
     p[3, 0] = 4.2
-    v = evaluate(SAFE, IDS, np.full(4, 0.1), p, safe_radius=10.0)
-    assert v.freeze and [e.vehicle for e in v.events] == [4]
-    p = SQUARE.copy()
-    p[1, 2] = -3.5
-    v = evaluate(SAFE, IDS, np.full(4, 0.1), p, safe_radius=10.0)
-    assert v.events[0].reason is SafetyReason.GEOFENCE
+    p[1, 2] = -4.5
+    assert evaluate(SAFE, IDS, np.full(4, 0.1), p, safe_radius=10.0) == evaluate(
+        SAFE, IDS, np.full(4, 0.1), SQUARE, safe_radius=10.0)
 
 
-def test_deformation_beyond_safe_bound_freezes() -> None:
+def test_deformation_beyond_safe_bound_holds() -> None:
     p = SQUARE.copy()
     p[0, :2] = [1.0, 1.0]
     v = evaluate(SAFE, IDS, np.full(4, 0.1), p, safe_radius=0.79)
-    assert v.freeze and not v.land
+    assert v.freeze and v.hold and not v.land
     assert v.events[0].reason is SafetyReason.DEFORMATION and v.events[0].vehicle == 1
+    radius = np.linalg.norm(p[:, :2] - p[:, :2].mean(axis=0), axis=1)
+    assert v.deformation == pytest.approx(radius.max())
+    assert "holding (velocity damping only)" in v.events[0].text
 
 
 def test_unknown_position_does_not_raise() -> None:
@@ -123,7 +125,7 @@ def test_unknown_position_does_not_raise() -> None:
 
 def test_compiled_rule_flags_are_the_rules_as_array_masks() -> None:
     """rule_flags against the rules written as plain numpy masks, on random teams with
-    NaN positions, never-heard vehicles, stale and lost ones, and some outside the fence."""
+    NaN positions, never-heard vehicles, stale and lost ones."""
     rng = np.random.default_rng(7)
     for _ in range(300):
         n = int(rng.integers(1, 12))
@@ -132,17 +134,15 @@ def test_compiled_rule_flags_are_the_rules_as_array_masks() -> None:
         p = rng.normal(0, 2.5, (n, 3))
         p[rng.random(n) < 0.05, rng.integers(0, 3)] = np.nan
         r = np.empty(n)
-        flags = rule_flags(age, p, 3.0, 0.5, 4.0, 3.0, 2.0, r)
+        flags = rule_flags(age, p, 3.0, 0.5, 2.0, r)
         known = np.all(np.isfinite(p), axis=1)
         with np.errstate(invalid="ignore"):
             lost = age > 3.0
             fresh = np.isfinite(age) & (age <= 0.5) & known
-            outside = fresh & ((np.abs(p[:, :2]).max(axis=1) > 4.0) | (-p[:, 2] > 3.0))
         radius = np.linalg.norm(p[:, :2] - p[:, :2].mean(axis=0), axis=1)
         deformed = fresh.all() & (radius > 2.0)
         assert np.array_equal(flags & LOST > 0, lost)
         assert np.array_equal(flags & STALE > 0, ~fresh)
-        assert np.array_equal(flags & OUTSIDE > 0, outside)
         assert np.array_equal(flags & DEFORMED > 0, deformed)
         if fresh.all():
             assert r == pytest.approx(radius)

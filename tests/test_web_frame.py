@@ -11,13 +11,13 @@ import pytest
 
 from gcs.analysis import analyze
 from gcs.config import load_team
+from gcs.formation import fit_shape
 from gcs.loop import FleetState
 from gcs.wire import SimTruth
 from tests.colours import hue_apart, hue_saturation_value
 from web import Trails, palette, quad_mesh
 from web._frame import LABEL_LIFT, TeamView, build_frame, rope_pull_estimate, vehicle_states
 from web._quadmesh import yaw_wxyz
-from web._shapefit import fit_shape
 from web.palette import VehicleState
 
 ROOT = Path(__file__).resolve().parents[1]

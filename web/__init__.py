@@ -25,8 +25,6 @@ Modules:
                          and plots.
     ``_scene``           The 3-D scene: the team, its ropes and payload, its shape, drawn
                          with viser.
-    ``_shapefit``        Where the desired shape would be if the team were perfect: the
-                         ghost.
     ``_status``          The status panel as HTML: flight phase, operator command, vehicles,
                          links, events.
     ``_timeline``        Replay time: where in the log the page is, and how fast it moves.

@@ -15,11 +15,11 @@ import numpy as np
 
 from gcs.analysis import Analysis
 from gcs.config import Team
+from gcs.formation import fit_shape
 from gcs.loop import FleetState
 from gcs.wire import SimTruth
 from web import palette
 from web._quadmesh import yaw_wxyz
-from web._shapefit import fit_shape
 from web._trails import Trails
 from web.palette import VehicleState
 

@@ -7,8 +7,11 @@ A step does one thing:
   phase the action leads to is done (takeoff: hover; lift: formation; set_down:
   hover; land: landed; resume keeps the phase: until it has run), at most
   ``timeout`` seconds;
-* ``sticks: {forward, right, rotate}`` held for ``duration`` seconds (re-sent
-  every tick, like a hand on a stick);
+* ``sticks: {forward, right, rotate}`` held until the team has flown them for
+  ``duration`` seconds (re-sent every tick, like a hand on a stick): time in
+  which the motion was frozen (a vehicle out of its mode, stale telemetry) or
+  held does not count, and a step not flown within ``timeout`` fails, so a
+  headless flight never reports motions it did not fly;
 * ``scale: 1.2`` or ``scale_steps: +2``; ``altitude: 1.8`` or ``altitude_steps: -1``;
 * ``wait: 3`` seconds with the sticks centred.
 
@@ -113,7 +116,6 @@ def play(scenario: Scenario, runtime: Runtime, clock: Clock, *,
          on_step: Callable[[int, Step], None] | None = None) -> None:
     """Play every step in order; ScenarioError names the step that failed."""
     op = runtime.operator
-    period = runtime.period
     for k, step in enumerate(scenario.steps):
         if on_step is not None:
             on_step(k, step)
@@ -132,15 +134,7 @@ def play(scenario: Scenario, runtime: Runtime, clock: Clock, *,
             else:  # resume: the phase stays
                 _wait_action(runtime, clock, step.timeout, where)
         elif step.sticks is not None:
-            end = now + step.duration
-            t = now
-            while t < end:
-                op.set_sticks(step.sticks.forward, step.sticks.right, step.sticks.rotate,
-                              now=t, source="scenario")
-                t = min(t + period, end)
-                clock.sleep_until(t)
-                _check_not_aborted(runtime, where)
-            op.release(now=clock.now(), source="scenario")
+            _hold_sticks(runtime, clock, step.sticks, step.duration, step.timeout, where)
         elif step.scale is not None:
             op.set_scale(step.scale)
         elif step.scale_steps is not None:
@@ -152,6 +146,37 @@ def play(scenario: Scenario, runtime: Runtime, clock: Clock, *,
         elif step.wait is not None:
             clock.sleep_until(now + step.wait)
             _check_not_aborted(runtime, where)
+
+
+def _hold_sticks(runtime: Runtime, clock: Clock, sticks: Sticks, duration: float,
+                 timeout: float, where: str) -> None:
+    """Hold the sticks until the loop has flown them for ``duration`` (ticks whose motion was
+    frozen do not count); ScenarioError after ``timeout`` of frozen motion."""
+    op, period = runtime.operator, runtime.period
+    start = t = clock.now()
+    flown = 0.0
+    while flown < duration - 1e-9:
+        op.set_sticks(sticks.forward, sticks.right, sticks.rotate, now=t, source="scenario")
+        step = min(period, duration - flown)
+        t = clock.now() + step
+        clock.sleep_until(t)
+        _check_not_aborted(runtime, where)
+        snap = runtime.snapshot
+        if snap is not None and snap.moving:
+            flown += step
+        elif snap is not None and snap.phase is not Phase.FORMATION:
+            raise ScenarioError(f"{where}: sticks move the team in formation flight only "
+                                f"(phase: {snap.phase.text}; lift first)")
+        elif clock.now() - start - flown > timeout:
+            raise ScenarioError(f"{where}: the motion was frozen for {timeout:g} s"
+                                f"{_last_warning(runtime)}")
+    op.release(now=clock.now(), source="scenario")
+
+
+def _last_warning(runtime: Runtime) -> str:
+    """`` (the latest warning or error)``, or nothing."""
+    last = [e.text for e in runtime.events() if e.level != "info"]
+    return f" ({last[-1]})" if last else ""
 
 
 def _phase(runtime: Runtime) -> Phase:
@@ -167,9 +192,7 @@ def _phase(runtime: Runtime) -> Phase:
 
 def _check_not_aborted(runtime: Runtime, where: str) -> None:
     if _phase(runtime) in (Phase.ABORTING, Phase.LANDING):
-        last = [e.text for e in runtime.events() if e.level != "info"]
-        raise ScenarioError(f"{where}: the flight was aborted"
-                            + (f" ({last[-1]})" if last else ""))
+        raise ScenarioError(f"{where}: the flight was aborted{_last_warning(runtime)}")
 
 
 def _wait_ready(runtime: Runtime, clock: Clock, timeout: float, where: str) -> None:

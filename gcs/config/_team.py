@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -182,11 +182,27 @@ class SafetyConfig:
                                "origin, m", default=4.0, gt=0.0)
     geofence_altitude: float = field(doc="highest altitude above the ground, m", default=4.0,
                                      gt=0.0)
+    geofence_margin: float = field(doc="warning margin inside the geofence: closer to the fence "
+                                   "than this warns, and the motion towards the fence is "
+                                   "slowed to stop at it, m", default=0.5, ge=0.0)
+    recovery: Literal["auto", "operator"] = field(
+        doc="vehicles that dropped out of the streaming mode on a setpoint gap while flying, "
+            "healthy and in shape: re-engaged by the GCS (auto) or on the operator's resume "
+            "(operator)", default="auto")
+    recover_after: float = field(doc="with automatic recovery, every link fresh this long "
+                                 "before the vehicles are re-engaged, s", default=1.0, gt=0.0)
+    deformed_land_growth: float = field(
+        doc="while the team holds a shape deformed beyond the analysis' safe bound (velocity "
+            "damping only), the team lands if the deformation grows by this much more, m",
+        default=0.3, gt=0.0)
 
     def __post_init__(self) -> None:
         if self.land_after < self.stale_after:
             raise ValueError(f"safety.land_after ({self.land_after:g} s) must not be shorter "
                              f"than safety.stale_after ({self.stale_after:g} s)")
+        if self.geofence_margin >= self.geofence_xy:
+            raise ValueError(f"safety.geofence_margin ({self.geofence_margin:g} m) must be "
+                             f"smaller than safety.geofence_xy ({self.geofence_xy:g} m)")
 
 
 @dataclass(frozen=True)

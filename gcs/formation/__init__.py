@@ -7,8 +7,10 @@ Modules:
 
     ``_graph``   Rigid formation model: graph, desired shape, incidence and rigidity.
     ``_motion``  Rigid motions of the team synthesised as distance disagreements.
+    ``_fit``     The desired shape fitted rigidly onto the team: its heading, its ghost.
 """
 
+from gcs.formation._fit import fit_rotation, fit_shape
 from gcs.formation._graph import Formation, FormationError, build_formation
 from gcs.formation._motion import MotionBasis, motion_basis
 
@@ -17,5 +19,7 @@ __all__ = [
     "FormationError",
     "MotionBasis",
     "build_formation",
+    "fit_rotation",
+    "fit_shape",
     "motion_basis",
 ]

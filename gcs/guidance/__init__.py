@@ -11,11 +11,12 @@ Modules:
               as loops.
 """
 
-from gcs.guidance._law import Guidance, MotionDemand
+from gcs.guidance._law import Guidance, MotionDemand, saturate
 from gcs.guidance._udi import finite_max_norm
 
 __all__ = [
     "Guidance",
     "MotionDemand",
     "finite_max_norm",
+    "saturate",
 ]

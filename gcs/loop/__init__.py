@@ -9,11 +9,14 @@ Modules:
 
     ``_clock``     Clocks: where every loop takes its time from.
     ``_fleet``     The team's latest state as arrays, read from the links once per tick.
+    ``_geofence``  The geofence: the team slows to a stop at it and can fly back.
     ``_gamepad``   A gamepad on the GCS side: sticks, altitude, scale, guidance switch,
                    abort and resume.
     ``_operator``  The operator's command: one object written by any source, read by the 4
                    Hz loop.
     ``_phases``    Flight phases of a transport and which operator action leads where.
+    ``_recovery``  Recovery after a setpoint gap: when vehicles that dropped to hold fly
+                   again.
     ``_runtime``   The GCS loop: operator sticks in, one acceleration setpoint per vehicle
                    out, at 4 Hz.
     ``_safety``    Safety rules of the GCS loop, each enforced here and nowhere else.
@@ -25,6 +28,7 @@ from gcs.loop._fleet import FleetState, FleetTable
 from gcs.loop._gamepad import Gamepad, load_gamepad_config
 from gcs.loop._operator import OperatorCommand, OperatorSnapshot
 from gcs.loop._phases import Action, Phase, PhaseError
+from gcs.loop._geofence import FenceVerdict
 from gcs.loop._runtime import Runtime, RuntimeSnapshot, TickStats
 from gcs.loop._safety import SafetyReason
 from gcs.loop._stepgate import HOLD_CAP_S, GatedClock, StepGate
@@ -36,6 +40,7 @@ __all__ = [
     "ClockStoppedError",
     "ExternalClock",
     "FleetState",
+    "FenceVerdict",
     "FleetTable",
     "Gamepad",
     "GatedClock",

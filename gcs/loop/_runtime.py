@@ -3,20 +3,25 @@
 Each tick (scheduled on a :class:`~gcs.loop.Clock`, wall or simulator time):
 
 1. read the fleet's latest telemetry (:class:`gcs.loop.FleetTable`);
-2. apply the safety rules (:func:`gcs.loop._safety.evaluate`): freeze the motion or
-   land the team;
-3. take the operator's command, run the guidance (relative positions, own
+2. apply the safety rules (:func:`gcs.loop._safety.evaluate`): freeze the motion,
+   hold a deformed team (velocity damping only) or land the team; re-engage
+   vehicles that dropped to hold on a setpoint gap (:mod:`gcs.loop._recovery`);
+3. take the operator's command, limit it at the geofence
+   (:mod:`gcs.loop._geofence`), run the guidance (relative positions, own
    velocities), saturate, and send each vehicle its setpoint through its
    autopilot profile; an error about one vehicle is reported and the loop
    goes on;
 4. advance the flight phase and record the guidance internals.
 
 Between ticks the latest setpoints are re-sent (``guidance.setpoint_rate_hz``,
-12 Hz by default): the guidance stays at the paper's 4 Hz, but one tick that
-comes late on a busy machine no longer leaves a vehicle half a second without
-a setpoint, which sends it into hold. In lockstep with the simulator (``gcs
-fly``) the sim cannot outrun the loop, and re-sends would arrive at sim times
-that vary from run to run, so there each tick sends once.
+12 Hz by default) by a thread of their own with its own wall-clock deadline:
+the guidance stays at the paper's 4 Hz, and a tick that comes late (a busy
+machine, a slow page, a garbage collection) no longer leaves a vehicle half a
+second without a setpoint, which sends it into hold. A setpoint re-sent more
+than :data:`HELD_SETPOINT_S` after its tick is replaced by velocity damping
+(the tick's shape-keeping terms are out of date by then). In lockstep with the
+simulator (``gcs fly``) the sim cannot outrun the loop, and re-sends would
+arrive at sim times that vary from run to run, so there each tick sends once.
 
 Phase actions that wait for acknowledgements (arm, take off, land) run on a
 worker thread, so the loop never waits on a vehicle. The latest
@@ -39,17 +44,25 @@ import numpy as np
 
 from gcs.analysis import Analysis, a_safe_span, analyze
 from gcs.config import Team
-from gcs.guidance import Guidance, MotionDemand, finite_max_norm
+from gcs.formation import fit_rotation
+from gcs.guidance import Guidance, MotionDemand, finite_max_norm, saturate
 from gcs.link import AutopilotProfile, Fanout, LinkError
 from gcs.loop._clock import Clock, ClockStoppedError
 from gcs.loop._fleet import FleetState, FleetTable
+from gcs.loop._geofence import FenceVerdict, fence_demand
 from gcs.loop._operator import OperatorCommand, OperatorSnapshot
 from gcs.loop._phases import Action, Phase, PhaseError, next_phase
+from gcs.loop._recovery import Recovery
 from gcs.loop._safety import SafetyVerdict, evaluate
 from gcs.loop._stepgate import HOLD_CAP_S, StepGate
 from gcs.wire import SETPOINT_MESSAGE, SetpointPacker, SimTruth
 
-__all__ = ["Event", "FlightRecorder", "Runtime", "RuntimeSnapshot", "TickStats"]
+__all__ = ["HELD_SETPOINT_S", "Event", "FlightRecorder", "Runtime", "RuntimeSnapshot",
+           "TickStats"]
+
+HELD_SETPOINT_S = 1.0
+"""Longest a tick's acceleration setpoint is re-sent, s of the loop's clock; past it, a late
+loop's re-sends damp velocity only."""
 
 
 class FlightRecorder(Protocol):
@@ -93,6 +106,8 @@ class TickStats:
     compute_p99: float
     jitter_p99: float
     overruns: int
+    stall_max: float = 0.0  # the latest tick so far, s late
+    setpoint_gap_max: float = 0.0  # longest wall time between two setpoint rounds, s
 
 
 @dataclass(frozen=True, eq=False)
@@ -110,7 +125,14 @@ class RuntimeSnapshot:
     compute_cpu: float = 0.0  # s of this thread's CPU time, this tick (excludes preemption)
     events: tuple[Event, ...] = field(default=())
     truth: SimTruth | None = None  # simulation only: the ground truth of this tick
+    moving: bool = False  # the operator's motion was flown this tick (not frozen or held)
+    fence: FenceVerdict | None = None  # what the geofence did (None: not applied)
+    recovery: str = ""  # vehicles waiting to be re-engaged, and when (empty: none)
 
+
+_GAP_S = 0.3
+"""Wall time without a setpoint round after which the vehicles may have dropped to hold, s (their
+timeout is 0.5 s: the stream may have stopped before the loop noticed)."""
 
 _ON_GCS_SETPOINTS = frozenset({Phase.HOVER, Phase.LIFTING, Phase.FORMATION,
                                Phase.SETTING_DOWN})
@@ -178,6 +200,17 @@ class Runtime:
         if self.setpoints_per_tick < 1:
             raise ValueError(f"setpoints_per_tick must be at least 1, got {setpoints_per_tick}")
         self._streamed: np.ndarray | None = None  # (n, 2) the last tick's setpoints, if streaming
+        self._streamed_at = 0.0  # the loop's time of that tick
+        self._send_lock = threading.Lock()  # the loop and the re-send thread share the packer
+        self._last_send = -math.inf  # wall time of the last setpoint round (-inf: none)
+        self._gap_max = 0.0
+        self._stall_max = 0.0
+        safety = team.config.safety
+        self.recovery = Recovery(automatic=safety.recovery == "auto",
+                                 settle=safety.recover_after)
+        """Re-engages vehicles that dropped to hold on a setpoint gap."""
+        self._hold_from: float | None = None  # deformation when the team began to hold, m
+        self._fence_text = ""
         self._handing_over = False  # taking off: the vehicles are switching to offboard
         self.resends = 0
         """Setpoint rounds re-sent between ticks so far."""
@@ -442,6 +475,8 @@ class Runtime:
                                safe_radius=self.safe_radius_for(self._accel_last), modes=modes,
                                expected=self._streaming_modes if modes else (),
                                coming_down=coming_down)
+            self._recover(now, fleet, verdict, modes, coming_down)
+            self._watch_deformation(verdict, phase)
         self._report_safety(verdict)
         op = self.operator.snapshot(now)
         phase = self.phase  # an action may have moved it meanwhile
@@ -457,12 +492,17 @@ class Runtime:
         moving = phase is Phase.FORMATION and not verdict.freeze and op.guidance_on
         demand = op.demand if moving else MotionDemand(scale=op.demand.scale)
         self._streamed = None
+        fence = None
         if self._streams(phase):
-            accel, self._accel_last = self._stream(fleet, demand, op)
-            self._streamed = accel
+            if not verdict.freeze and fleet.located:
+                fence = self._fence(fleet, demand)
+                demand = fence.demand
+            accel, self._accel_last = self._stream(fleet, demand, op, hold=verdict.hold)
+            self._streamed, self._streamed_at = accel, now
             self._advance(phase, op, now)
         else:
             accel, self._accel_last = np.zeros((fleet.n, 2)), 0.0
+            self._last_send = -math.inf  # the next stream starts afresh (no gap to measure)
         errors = self.team.formation.distance_errors(fleet.p_ned[:, :2], demand.scale)
         truth = self.truth_source() if self.truth_source is not None else None
         phase = self.phase  # after this tick's transitions: the recorder and the snapshot agree
@@ -482,7 +522,8 @@ class Runtime:
                                accel_cmd=accel, distance_errors=errors, safety=verdict,
                                compute_time=self._compute[-1], compute_cpu=cpu,
                                events=self.events()[-20:],
-                               truth=truth)
+                               truth=truth, moving=moving, fence=fence,
+                               recovery=self.recovery.status(now))
         self._snapshot = snap
         # Lockstep: the phase actions and a scenario act now, while the sim stands still
         # at this tick's time; their effects show in the next tick.
@@ -505,18 +546,85 @@ class Runtime:
                 return
             self._set_phase(Phase.READY)
 
-    def _stream(self, fleet: FleetState, demand: MotionDemand,
-                op: OperatorSnapshot) -> tuple[np.ndarray, float]:
+    def _stream(self, fleet: FleetState, demand: MotionDemand, op: OperatorSnapshot, *,
+                hold: bool = False) -> tuple[np.ndarray, float]:
         """Guidance and one setpoint per vehicle (errors are per vehicle): the accelerations
-        sent and the largest one's norm."""
-        if fleet.located:
+        sent and the largest one's norm. ``hold``: velocity damping only."""
+        if hold:
+            accel = self._damping(fleet)
+            largest = finite_max_norm(accel)
+        elif fleet.located:
             accel = self.guidance.accelerations(fleet.p_ned[:, :2], fleet.v_ned[:, :2],
                                                 fleet.yaw, demand)
             largest = finite_max_norm(accel)  # what the guidance could not compute becomes 0
         else:  # cannot place every vehicle: hold still horizontally
             accel, largest = np.zeros((fleet.n, 2)), 0.0
-        self._send_all(accel, z_ned=-op.altitude)
+        self._send_all(accel, z_ned=-self._altitude(op))
         return accel, largest
+
+    def _altitude(self, op: OperatorSnapshot) -> float:
+        """The altitude setpoint: the operator's, never above the geofence's ceiling."""
+        return min(op.altitude, self.team.config.safety.geofence_altitude)
+
+    def _damping(self, fleet: FleetState) -> np.ndarray:
+        """Velocity damping only, ``-c1 v`` saturated (NaN velocity: zero): the hold that
+        cannot amplify a deformation, whatever the positions say."""
+        v = np.nan_to_num(fleet.v_ned[:, :2], nan=0.0, posinf=0.0, neginf=0.0)
+        lim = self.team.config.limits
+        return saturate(-self.guidance.c1 * v, norm_max=lim.accel_norm, axis_max=lim.accel_axis)
+
+    def _fence(self, fleet: FleetState, demand: MotionDemand) -> FenceVerdict:
+        """The demand limited by the geofence (the payload counts where it is known)."""
+        p = fleet.p_ned[:, :2]
+        f = self.team.formation
+        heading = fit_rotation(demand.scale * f.positions, p)
+        truth = self.truth_source() if self.truth_source is not None else None
+        points = p if truth is None else np.vstack([p, np.array(truth.payload_p_ned[:2])])
+        fence = fence_demand(self.team.config.safety, demand, heading=heading, points=points,
+                             velocity=fleet.v_ned[:, :2].mean(axis=0), altitude=-fleet.p_ned[:, 2],
+                             max_speed=self.guidance.max_speed, c1=self.guidance.c1)
+        text = fence.text + (" (above the ceiling)" if fence.above else "")
+        if text and text != self._fence_text:
+            self._event("warning", text)
+        self._fence_text = text
+        return fence
+
+    def _recover(self, now: float, fleet: FleetState, verdict: SafetyVerdict,
+                 modes: tuple[str, ...], coming_down: np.ndarray | None) -> None:
+        """Re-engage the vehicles that dropped out of the streaming mode, once the team is
+        healthy again (:mod:`gcs.loop._recovery`)."""
+        out: tuple[int, ...] = ()
+        if modes and coming_down is not None:
+            out = tuple(vid for vid, mode, want, down in zip(
+                self.ids, modes, self._streaming_modes, coming_down, strict=True)
+                if mode != want and not down)
+        fresh = bool(np.all(fleet.age <= self.team.config.safety.stale_after))
+        if not fresh or time.monotonic() - self._last_send > _GAP_S:
+            self.recovery.note_gap(now)
+        healthy = fresh and fleet.located and not verdict.hold and not verdict.land
+        if not self.recovery.update(now, out=out, healthy=healthy):
+            return
+        if not self._action_busy.acquire(blocking=False):
+            return  # an action is running (a resume among them): the next try comes later
+        self._event("info", f"recovery: every link fresh for "
+                            f"{self.recovery.settle:g} s: re-engaging vehicles "
+                            f"{', '.join(map(str, self.recovery.after_gap))}")
+        self.gate.submit(self._pool, self._run_action, Action.RESUME, self.phase)
+
+    def _watch_deformation(self, verdict: SafetyVerdict, phase: Phase) -> None:
+        """Land a held team whose deformation keeps growing."""
+        if not verdict.hold:
+            self._hold_from = None
+            return
+        if self._hold_from is None:
+            self._hold_from = verdict.deformation
+            return
+        growth = self.team.config.safety.deformed_land_growth
+        if verdict.deformation > self._hold_from + growth and phase.airborne \
+                and phase not in (Phase.ABORTING, Phase.LANDING):
+            self._event("error", f"deformation grew from {self._hold_from:.2f} to "
+                                 f"{verdict.deformation:.2f} m while holding: landing the team")
+            self.request(Action.ABORT)
 
     def _send_all(self, accel: np.ndarray, *, z_ned: float) -> None:
         """One setpoint per vehicle, packed for the whole fleet at once; an error is reported
@@ -532,8 +640,14 @@ class Runtime:
         only = None
         if self._vertical_calls:  # profiles whose vertical channel is not z itself
             only = self._vertical_from_profiles(z_ned, vertical)
-        packed = self._packer.pack(time.monotonic(), accel, vertical)
-        for i, exc in self._fanout.send(packed, SETPOINT_MESSAGE.crc_extra, only).items():
+        with self._send_lock:
+            wall = time.monotonic()
+            if wall - self._last_send > self._gap_max and math.isfinite(self._last_send):
+                self._gap_max = wall - self._last_send
+            self._last_send = wall
+            packed = self._packer.pack(wall, accel, vertical)
+            failed = self._fanout.send(packed, SETPOINT_MESSAGE.crc_extra, only)
+        for i, exc in failed.items():
             self._not_sent(i, exc)
 
     def _vertical_from_profiles(self, z_ned: float, vertical: np.ndarray) -> list[int] | None:
@@ -569,11 +683,18 @@ class Runtime:
 
     def resend(self) -> bool:
         """Re-send the last tick's setpoints (the altitude target's ramp moves on); False if
-        the last tick streamed none or the phase stopped streaming since."""
+        the last tick streamed none or the phase stopped streaming since.
+
+        More than :data:`HELD_SETPOINT_S` after its tick, the loop is stalled: the
+        re-send damps velocity only (:meth:`_damping`) on the latest telemetry.
+        """
         accel = self._streamed
         if accel is None or not self._streams(self.phase):
             return False
-        self._send_all(accel, z_ned=-self.operator.snapshot(self.clock.now()).altitude)
+        now = self.clock.now()
+        if now - self._streamed_at > HELD_SETPOINT_S:
+            accel = self._damping(self.fleet_table.read(now))
+        self._send_all(accel, z_ned=-self._altitude(self.operator.snapshot(now)))
         self.resends += 1
         return True
 
@@ -628,21 +749,35 @@ class Runtime:
         jit = np.array(self._jitter) if self._jitter else np.zeros(1)
         return TickStats(ticks=self._ticks, compute_last=float(comp[-1]),
                          compute_p99=float(np.percentile(comp, 99)),
-                         jitter_p99=float(np.percentile(jit, 99)), overruns=self._overruns)
+                         jitter_p99=float(np.percentile(jit, 99)), overruns=self._overruns,
+                         stall_max=self._stall_max, setpoint_gap_max=self._gap_max)
 
     def run(self, stop: threading.Event) -> None:
         """Tick at the guidance rate on the clock until ``stop`` is set (or the clock dies).
 
-        The period is cut into ``setpoints_per_tick`` slots: a tick in the first,
-        re-sends in the others. After a stall longer than a period the loop ticks
-        at once and restarts its schedule from there (it skips, never bursts).
+        With more than one setpoint per tick, a thread of its own re-sends them
+        (:meth:`_keep_streaming`). After a stall longer than a period the loop
+        ticks at once and restarts its schedule from there (it skips, never
+        bursts); the stall is an event, recorded, and counted in :meth:`stats`.
         """
-        n = self.setpoints_per_tick
-        slot = self.period / n
+        done = threading.Event()
+        keeper = None
+        if self.setpoints_per_tick > 1:
+            keeper = threading.Thread(target=self._keep_streaming, args=(done, stop),
+                                      daemon=True, name="gcs-setpoints")
+            keeper.start()
+        try:
+            self._tick_forever(stop)
+        finally:
+            done.set()
+            if keeper is not None:
+                keeper.join(timeout=1.0)
+
+    def _tick_forever(self, stop: threading.Event) -> None:
         k = 0
         start = self.clock.now()
         while not stop.is_set():
-            due = start + k * slot
+            due = start + k * self.period
             try:
                 self.clock.sleep_until(due)
             except ClockStoppedError as exc:
@@ -650,20 +785,36 @@ class Runtime:
                 return
             now = self.clock.now()
             late = now - due
+            self._stall_max = max(self._stall_max, late)
             if late > self.period:
+                self.recovery.note_gap(now)
                 self._overruns += 1
-                self._event("warning", f"loop ran {late:.2f} s late: no setpoints for "
-                                       f"{late + slot:.2f} s")
+                self._event("warning", f"loop stalled: tick {late:.2f} s late")
                 start, k = now, 0  # tick now, then keep the schedule from here
             try:
-                if k % n == 0:
-                    self._jitter.append(late)
-                    self.tick()
-                else:
-                    self.resend()
+                self._jitter.append(late)
+                self.tick()
             except Exception as exc:  # a bug must not stop the team's setpoint stream silently
                 self._event("error", f"tick failed: {type(exc).__name__}: {exc}")
             k += 1
+
+    def _keep_streaming(self, done: threading.Event, stop: threading.Event) -> None:
+        """Re-send the latest setpoints whenever a slot (``period / setpoints_per_tick``) of
+        wall time passed without a round, whatever the loop is doing."""
+        slot = self.period / self.setpoints_per_tick
+        while not (done.is_set() or stop.is_set()):
+            wait = self._last_send + slot - time.monotonic()
+            if wait > 0.0:
+                done.wait(wait)
+                continue
+            try:
+                sent = self.resend()
+            except Exception as exc:  # report, and keep the stream alive
+                self._warn_once(("resend", 0), f"setpoint re-send failed: "
+                                               f"{type(exc).__name__}: {exc}")
+                sent = False
+            if not sent:
+                done.wait(slot)
 
     def close(self) -> None:
         """Stop the worker threads (does not land: that is the operator's or abort's job)."""

@@ -5,18 +5,21 @@ Every tick the loop asks :func:`evaluate` what the team may do:
 * telemetry of a vehicle older than ``stale_after`` (0.5 s): the motion
   freezes (shape kept, disagreements zero) and the vehicle is reported;
 * a vehicle silent for ``land_after``: the whole team lands;
-* a vehicle outside the geofence (horizontal box or ceiling): the motion freezes;
 * a vehicle farther from the team's centroid than the analysis' safe bound
   (beyond it the ropes pull harder than the horizontal force left at the bank
-  limit minus the largest commanded acceleration): the motion freezes;
+  limit minus the largest commanded acceleration): the team holds, its
+  commands damping velocity only (the shape-keeping terms would amplify a
+  deformation the GCS cannot trust, as with positions in disagreeing frames),
+  and lands if the deformation keeps growing (the loop tracks the growth);
 * while the team flies on the GCS's setpoints, a vehicle that left the mode
   that flies them (a failsafe, a pilot's switch, a lost setpoint stream): the
   motion freezes, since the rest of the team would drag it by the ropes; one
   that comes down on its own (a landing mode, or disarmed) lands the team,
   which cannot hold the payload without it.
 
-Acceleration saturation lives in :func:`gcs.guidance._law.saturate`, the bank limit
-on board the vehicles. An unknown vehicle state (NaN) never raises here: it is
+The geofence lives in :mod:`gcs.loop._geofence` (it limits the motion rather
+than stopping it), acceleration saturation in :func:`gcs.guidance._law.saturate`,
+the bank limit on board the vehicles. An unknown vehicle state (NaN) never raises here: it is
 reported as stale.
 """
 
@@ -40,7 +43,6 @@ class SafetyReason(enum.Enum):
 
     STALE = "telemetry is stale"
     LOST = "link lost"
-    GEOFENCE = "outside the geofence"
     DEFORMATION = "deformed beyond the safe bound"
     MODE = "left the GCS's mode"
     COMING_DOWN = "coming down on its own"
@@ -62,9 +64,11 @@ class SafetyEvent:
 class SafetyVerdict:
     """What the team may do this tick."""
 
-    freeze: bool
+    freeze: bool  # the operator's motion stops (the shape is kept)
     land: bool
     events: tuple[SafetyEvent, ...]
+    hold: bool = False  # commands damp velocity only (deformed beyond the safe bound)
+    deformation: float = float("nan")  # largest distance from the centroid, m (NaN: unknown)
 
 
 _OK = SafetyVerdict(freeze=False, land=False, events=())
@@ -94,8 +98,7 @@ def evaluate(cfg: SafetyConfig, ids: Sequence[int], age: np.ndarray, p_ned: np.n
     # finds none (as numpy masks this took 0.3 ms of the 4 Hz tick).
     age, p_ned = np.asarray(age, dtype=float), np.asarray(p_ned, dtype=float)
     r = np.empty(len(age))
-    flags = rule_flags(age, p_ned, cfg.land_after, cfg.stale_after, cfg.geofence_xy,
-                       cfg.geofence_altitude, safe_radius, r)
+    flags = rule_flags(age, p_ned, cfg.land_after, cfg.stale_after, safe_radius, r)
     if not flags.any() and not modes:  # nearly every tick: no rule to look further at
         return _OK
     land = False
@@ -108,16 +111,13 @@ def evaluate(cfg: SafetyConfig, ids: Sequence[int], age: np.ndarray, p_ned: np.n
         else:
             events.append(SafetyEvent(SafetyReason.STALE, vid,
                                       f"vehicle {vid}: {_silent(age[i])}: motion frozen"))
-    for i in np.flatnonzero(flags & OUTSIDE).tolist():
-        vid, (x, y, z) = ids[i], p_ned[i]
-        events.append(SafetyEvent(SafetyReason.GEOFENCE, vid,
-                                  f"vehicle {vid}: at ({x:.2f}, {y:.2f}, {-z:.2f}) m, "
-                                  f"outside the geofence: motion frozen"))
-    for i in np.flatnonzero(flags & DEFORMED).tolist():
+    deformed = np.flatnonzero(flags & DEFORMED).tolist()
+    for i in deformed:
         vid = ids[i]
         events.append(SafetyEvent(SafetyReason.DEFORMATION, vid,
                                   f"vehicle {vid}: {r[i]:.2f} m from the centroid, "
-                                  f"safe bound {safe_radius:.2f} m: motion frozen"))
+                                  f"safe bound {safe_radius:.2f} m: holding (velocity "
+                                  f"damping only)"))
     for i, (mode, want) in enumerate(zip(modes, expected, strict=True)):
         if mode == want or flags[i] & STALE:  # a silent vehicle is reported as such, above
             continue
@@ -132,23 +132,22 @@ def evaluate(cfg: SafetyConfig, ids: Sequence[int], age: np.ndarray, p_ned: np.n
                                       f"{want}: motion frozen"))
     if not events:
         return _OK
-    return SafetyVerdict(freeze=True, land=land, events=tuple(events))
+    return SafetyVerdict(freeze=True, land=land, events=tuple(events), hold=bool(deformed),
+                         deformation=float(np.nanmax(r)) if deformed else float("nan"))
 
 
-LOST, STALE, OUTSIDE, DEFORMED = 1, 2, 4, 8
+LOST, STALE, DEFORMED = 1, 2, 4
 """Bits of :func:`rule_flags`, one per rule that looks at the telemetry alone."""
 
 
 @kernel()
 def rule_flags(age: np.ndarray, p_ned: np.ndarray, land_after: float, stale_after: float,
-               geofence_xy: float, geofence_altitude: float, safe_radius: float,
-               r: np.ndarray) -> np.ndarray:
+               safe_radius: float, r: np.ndarray) -> np.ndarray:
     """Which of the telemetry rules each vehicle breaks, as bits (n,) int64.
 
     ``age`` (n,) s, ``p_ned`` (n, 3) m as :func:`evaluate` takes them. LOST:
     silent beyond ``land_after`` (never heard counts); STALE: position older
-    than ``stale_after`` or unknown (NaN); OUTSIDE: a fresh vehicle beyond the
-    horizontal box or the ceiling; DEFORMED: farther than ``safe_radius`` from
+    than ``stale_after`` or unknown (NaN); DEFORMED: farther than ``safe_radius`` from
     the team's centroid, judged only when every vehicle is fresh (the centroid
     of a partly known team means nothing). ``r`` receives the distances from
     the centroid (NaN when not judged).
@@ -164,8 +163,6 @@ def rule_flags(age: np.ndarray, p_ned: np.ndarray, land_after: float, stale_afte
         if not (math.isfinite(age[i]) and age[i] <= stale_after and known):
             flags[i] |= STALE
             fresh_all = False
-        elif max(abs(x), abs(y)) > geofence_xy or -z > geofence_altitude:
-            flags[i] |= OUTSIDE
     r[:] = np.nan
     if fresh_all:
         cx = cy = 0.0

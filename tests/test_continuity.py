@@ -1,0 +1,213 @@
+"""The team keeps flying through a bad second, against the real simulator.
+
+Lockstep flights (the sim's clock; cannot fail from load): a lost second on
+every radio is flown through by itself (or on the operator's resume, with that
+policy); a pilot's mode switch is not overruled; a team whose positions
+disagree with its shape holds instead of tearing itself apart, and lands if
+the disagreement keeps growing; the geofence stops the team and lets it fly
+back. One real-time flight: a loop thread stalled for 0.6 s leaves no vehicle
+without setpoints (time is the subject there).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import threading
+import time
+from collections.abc import Callable, Iterator
+
+import numpy as np
+
+from gcs.app import GcsApp, SimProcess, free_tcp_port
+from gcs.app._scenario import Scenario, Step, play
+from gcs.config import Team, load_team
+from gcs.loop import FleetState, Phase, RuntimeSnapshot
+from gcs.transport import ZenohSettings
+from gcs.wire import SimMode
+from tests.test_safety_flight import break_vehicle, sim_sleep
+
+TEAM = load_team("configs/bebop_square.yaml")
+OFFBOARD = ("OFFBOARD",) * 4
+
+
+def with_safety(team: Team, **changes: object) -> Team:
+    cfg = team.config
+    return dataclasses.replace(team, config=dataclasses.replace(
+        cfg, safety=dataclasses.replace(cfg.safety, **changes)))
+
+
+@contextlib.contextmanager
+def formation(team: Team = TEAM) -> Iterator[GcsApp]:
+    """The team in formation flight with the payload lifted (lockstep)."""
+    endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
+    with SimProcess(team.source, endpoint=endpoint, speed="max", lockstep=True), \
+            GcsApp(team, zenoh_settings=ZenohSettings(connect=(endpoint,)), sim_clock=True,
+                   lockstep=True) as app:
+        app.start()
+        play(Scenario(name="up", steps=(Step(action="arm"), Step(action="takeoff"),
+                                          Step(action="lift"))), app.runtime, app.clock)
+        assert app.runtime.phase is Phase.FORMATION
+        yield app
+
+
+def fly_sticks(app: GcsApp, seconds: float, forward: float = 0.0, right: float = 0.0,
+               each: Callable[[RuntimeSnapshot], None] | None = None) -> None:
+    end = app.clock.now() + seconds
+    while app.clock.now() < end:
+        app.operator.set_sticks(forward, right, 0.0, now=app.clock.now(), source="test")
+        sim_sleep(app, 0.25)
+        if each is not None and app.runtime.snapshot is not None:
+            each(app.runtime.snapshot)
+
+
+def texts(app: GcsApp) -> list[str]:
+    return [e.text for e in app.runtime.events()]
+
+
+def lose_every_radio(app: GcsApp, seconds: float) -> None:
+    for vid in TEAM.formation.ids:
+        break_vehicle(app, "cut", vid)
+    fly_sticks(app, seconds, forward=0.6)
+    for vid in TEAM.formation.ids:
+        break_vehicle(app, "restore", vid)
+
+
+def test_a_lost_second_on_every_radio_is_flown_through() -> None:
+    with formation() as app:
+        fly_sticks(app, 1.0, forward=0.6)
+        lose_every_radio(app, 1.2)
+        modes_seen: set[str] = set()
+        fly_sticks(app, 5.0, forward=0.6, each=lambda s: modes_seen.update(s.fleet.modes))
+        snap = app.runtime.snapshot
+        assert "HOLD" in modes_seen  # the gap did send them to hold
+        assert snap.phase is Phase.FORMATION and snap.fleet.modes == OFFBOARD
+        assert snap.moving and snap.demand.forward > 0.0 and not snap.recovery
+        assert "recovery: every link fresh for 1 s: re-engaging vehicles 1, 2, 3, 4" \
+            in texts(app)
+        assert app.runtime.recovery.attempts == 1
+
+
+def test_with_the_operator_policy_the_team_waits_for_resume_and_says_so() -> None:
+    with formation(with_safety(TEAM, recovery="operator")) as app:
+        lose_every_radio(app, 1.2)
+        fly_sticks(app, 4.0, forward=0.6)
+        snap = app.runtime.snapshot
+        assert set(snap.fleet.modes) == {"HOLD"} and not snap.moving
+        assert snap.recovery == ("vehicles 1, 2, 3, 4 out of the streaming mode: press "
+                                 "Resume to fly them again")
+        play(Scenario(name="resume", steps=(Step(action="resume"),)), app.runtime, app.clock)
+        fly_sticks(app, 1.0, forward=0.6)
+        snap = app.runtime.snapshot
+        assert snap.fleet.modes == OFFBOARD and snap.moving and not snap.recovery
+
+
+def test_a_pilots_mode_switch_is_not_overruled() -> None:
+    with formation() as app:
+        fly_sticks(app, 1.0, forward=0.6)
+        app.links.profiles[3].set_mode(SimMode.HOLD)
+        fly_sticks(app, 4.0, forward=0.6)
+        snap = app.runtime.snapshot
+        assert snap.fleet.modes[2] == "HOLD" and not snap.moving
+        assert "press Resume" in snap.recovery
+        assert app.runtime.recovery.attempts == 0
+
+
+def shifted(app: GcsApp, offset: Callable[[float], float]) -> None:
+    """Vehicle 1's reported position moved north by ``offset(t)`` m: its local frame
+    disagrees with the others' (an autopilot's own origin)."""
+    table = app.runtime.fleet_table
+    read = table.read
+
+    def wrong(now: float) -> FleetState:
+        fleet = read(now)
+        p = fleet.p_ned.copy()
+        p[0, 0] += offset(now)
+        return dataclasses.replace(fleet, p_ned=p)
+
+    table.read = wrong  # type: ignore[method-assign]
+
+
+def true_errors(snap: RuntimeSnapshot) -> float:
+    assert snap.truth is not None
+    p = np.array(snap.truth.vehicle_p_ned)[:, :2]
+    return float(np.abs(TEAM.formation.distance_errors(p)).max())
+
+
+def test_positions_that_disagree_with_the_shape_hold_the_team_instead_of_tearing_it() -> None:
+    """Shape keeping on a vehicle 1.4 m out of place by its frame alone would drag the real
+    team apart; holding (velocity damping only) keeps it together, and says why."""
+    with formation() as app:
+        shifted(app, lambda _t: 1.4)
+        worst: list[float] = []
+        fly_sticks(app, 8.0, each=lambda s: worst.append(true_errors(s)))
+        snap = app.runtime.snapshot
+        assert snap.safety.hold and not snap.moving and snap.phase is Phase.FORMATION
+        assert max(worst) < 0.3, max(worst)
+        v = snap.fleet.v_ned[:, :2]
+        np.testing.assert_allclose(snap.accel_cmd, -TEAM.config.guidance.c1 * v, atol=1e-9)
+        assert any("from the centroid" in t and "holding (velocity damping only)" in t
+                   for t in texts(app))
+
+
+def test_a_deformation_that_keeps_growing_while_holding_lands_the_team() -> None:
+    with formation() as app:
+        t0 = app.clock.now()
+        shifted(app, lambda t: 1.4 + 0.2 * (t - t0))
+        fly_sticks(app, 4.0)
+        assert app.runtime.phase in (Phase.ABORTING, Phase.LANDING, Phase.LANDED)
+        assert any(t.startswith("deformation grew from ") and t.endswith("landing the team")
+                   for t in texts(app))
+
+
+def test_flown_east_at_full_stick_the_team_stops_at_the_fence_and_flies_back() -> None:
+    fence = TEAM.config.safety.geofence_xy
+    with formation() as app:
+        east: list[float] = []
+
+        def reach(s: RuntimeSnapshot) -> None:
+            assert s.truth is not None
+            east.append(max(max(p[1] for p in s.truth.vehicle_p_ned), s.truth.payload_p_ned[1]))
+
+        fly_sticks(app, 30.0, right=1.0, each=reach)
+        assert max(east) <= fence, max(east)
+        assert east[-1] > fence - TEAM.config.safety.geofence_margin
+        warnings = [t for t in texts(app) if t.startswith("at the geofence (east)")]
+        assert warnings and app.runtime.phase is Phase.FORMATION
+        stopped = east[-1]
+        east.clear()
+        fly_sticks(app, 8.0, right=-1.0, each=reach)
+        assert east[-1] < stopped - 2.0, east[-1]
+
+
+def test_a_loop_stall_leaves_no_vehicle_without_setpoints() -> None:
+    """Real time: the loop thread is held for 0.85 s in one tick (a slow listener), so the
+    next tick comes 0.6 s late; the re-send thread keeps every vehicle's setpoints coming,
+    and the stall is reported."""
+    endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
+    with SimProcess(TEAM.source, endpoint=endpoint, speed="1"), \
+            GcsApp(TEAM, zenoh_settings=ZenohSettings(connect=(endpoint,))) as app:
+        app.start()
+        play(Scenario(name="up", steps=(Step(action="arm"), Step(action="takeoff"))),
+             app.runtime, app.clock)
+        assert app.runtime.phase is Phase.HOVER
+        stall = threading.Event()
+        stall.set()
+
+        def slow_listener(_snap: RuntimeSnapshot) -> None:
+            if stall.is_set():
+                stall.clear()
+                time.sleep(0.85)
+
+        app.runtime.add_listener(slow_listener)
+        modes: set[tuple[str, ...]] = set()
+        end = time.monotonic() + 3.0
+        while time.monotonic() < end:
+            if app.runtime.snapshot is not None:
+                modes.add(app.runtime.snapshot.fleet.modes)
+            time.sleep(0.05)
+        stats = app.runtime.stats()
+        assert stats.stall_max >= 0.5, stats
+        assert stats.setpoint_gap_max < 0.5, stats
+        assert modes == {OFFBOARD}, modes
+        assert any(t.startswith("loop stalled: tick ") for t in texts(app))
