@@ -26,9 +26,9 @@ Modules:
 from gcs.loop._clock import Clock, ClockStoppedError, ExternalClock, WallClock
 from gcs.loop._fleet import FleetState, FleetTable
 from gcs.loop._gamepad import Gamepad, load_gamepad_config
+from gcs.loop._geofence import FenceVerdict
 from gcs.loop._operator import OperatorCommand, OperatorSnapshot
 from gcs.loop._phases import Action, Phase, PhaseError
-from gcs.loop._geofence import FenceVerdict
 from gcs.loop._runtime import Runtime, RuntimeSnapshot, TickStats
 from gcs.loop._safety import SafetyReason
 from gcs.loop._stepgate import HOLD_CAP_S, GatedClock, StepGate
@@ -39,8 +39,8 @@ __all__ = [
     "Clock",
     "ClockStoppedError",
     "ExternalClock",
-    "FleetState",
     "FenceVerdict",
+    "FleetState",
     "FleetTable",
     "Gamepad",
     "GatedClock",
