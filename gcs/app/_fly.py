@@ -50,6 +50,7 @@ def fly(team: Team, scenario: Scenario, *, speed: str = "max", record: Path | No
     settings = ZenohSettings(mode="peer", connect=(endpoint,))
     metrics = FlightMetrics()
     error: str | None = None
+    loop: dict[str, object] = {}
     wall0 = time.monotonic()
     try:
         with GcsApp(team, zenoh_settings=settings, sim_clock=True, lockstep=sim is not None,
@@ -70,6 +71,10 @@ def fly(team: Team, scenario: Scenario, *, speed: str = "max", record: Path | No
                     error = str(exc)
                 except Exception as exc:  # the clock stopped, the sim died...
                     error = f"{type(exc).__name__}: {exc}"
+            stats = app.loop.stats()
+            loop = {"loop_stall_max_s": round(stats.stall_max, 3),
+                    "setpoint_gap_max_s": round(stats.setpoint_gap_max, 3),
+                    "recoveries": app.loop.recovery.attempts}
             if sim is not None and not sim.alive():
                 error = (error or "") + " (simulator exited: " + " | ".join(
                     sim.stderr_tail[-3:]) + ")"
@@ -77,5 +82,5 @@ def fly(team: Team, scenario: Scenario, *, speed: str = "max", record: Path | No
         if sim is not None:
             sim.close()
     wall = time.monotonic() - wall0
-    return FlightResult(metrics=metrics.to_json(wall_seconds=wall), error=error,
+    return FlightResult(metrics=metrics.to_json(wall_seconds=wall) | loop, error=error,
                         record=str(record) if record is not None else None)

@@ -44,10 +44,14 @@ class FlightMetrics:
     start: float | None = None
     end: float = 0.0
     ticks: int = 0
+    offboard_exits: int = 0
     _phases: list[str] = field(default_factory=list)
+    _streaming_modes: tuple[str, ...] | None = None
+    _modes: tuple[str, ...] = ()
 
     def add(self, snap: RuntimeSnapshot) -> None:
         """Account for one tick of a live flight (with its ground truth in simulation)."""
+        self._count_exits(snap.phase, snap.fleet.modes)
         truth = snap.truth
         self.add_tick(snap.fleet.t, snap.phase, distance_errors=snap.distance_errors,
                       tilt=snap.fleet.tilt, accel_cmd=snap.accel_cmd,
@@ -87,6 +91,21 @@ class FlightMetrics:
             self.rope_tension_max = hi if self.rope_tension_max is None else max(
                 self.rope_tension_max, hi)
 
+    def _count_exits(self, phase: Phase, modes: tuple[str, ...]) -> None:
+        """Vehicles leaving the mode that flies the GCS's setpoints (OFFBOARD, GUIDED) while
+        the team flies on them: each is a vehicle that fell out of the stream."""
+        if phase not in _FLOWN:
+            self._modes = ()
+            return
+        if self._streaming_modes is None:  # the modes the take-off handed the team over in
+            self._streaming_modes = modes
+        if self._modes:
+            self.offboard_exits += sum(
+                before == want != now
+                for before, now, want in zip(self._modes, modes, self._streaming_modes,
+                                             strict=True))
+        self._modes = modes
+
     @property
     def duration(self) -> float:
         return 0.0 if self.start is None else self.end - self.start
@@ -110,6 +129,7 @@ class FlightMetrics:
             "worst_accel_cmd_m_s2": num(self.worst_accel_cmd),
             "rope_tension_min_N": num(self.rope_tension_min),
             "rope_tension_max_N": num(self.rope_tension_max),
+            "offboard_exits": self.offboard_exits,
             "real_time_factor": (num(self.duration / wall_seconds, 2)
                                  if wall_seconds else None),
         }

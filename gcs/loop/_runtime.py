@@ -107,7 +107,7 @@ class TickStats:
     jitter_p99: float
     overruns: int
     stall_max: float = 0.0  # the latest tick so far, s late
-    setpoint_gap_max: float = 0.0  # longest wall time between two setpoint rounds, s
+    setpoint_gap_max: float = 0.0  # longest time between two setpoint rounds (loop's clock), s
 
 
 @dataclass(frozen=True, eq=False)
@@ -131,8 +131,8 @@ class RuntimeSnapshot:
 
 
 _GAP_S = 0.3
-"""Wall time without a setpoint round after which the vehicles may have dropped to hold, s (their
-timeout is 0.5 s: the stream may have stopped before the loop noticed)."""
+"""Time without a setpoint round after which the vehicles may have dropped to hold, s of the
+loop's clock (their timeout is 0.5 s: the stream may have stopped before the loop noticed)."""
 
 _ON_GCS_SETPOINTS = frozenset({Phase.HOVER, Phase.LIFTING, Phase.FORMATION,
                                Phase.SETTING_DOWN})
@@ -203,7 +203,9 @@ class Runtime:
         self._streamed_at = 0.0  # the loop's time of that tick
         self._send_lock = threading.Lock()  # the loop and the re-send thread share the packer
         self._last_send = -math.inf  # wall time of the last setpoint round (-inf: none)
+        self._last_send_clock = -math.inf  # the same on the loop's clock
         self._gap_max = 0.0
+        self._gap_seen = False  # a setpoint round came later than _GAP_S after the one before
         self._stall_max = 0.0
         safety = team.config.safety
         self.recovery = Recovery(automatic=safety.recovery == "auto",
@@ -502,7 +504,8 @@ class Runtime:
             self._advance(phase, op, now)
         else:
             accel, self._accel_last = np.zeros((fleet.n, 2)), 0.0
-            self._last_send = -math.inf  # the next stream starts afresh (no gap to measure)
+            # the next stream starts afresh (no gap to measure)
+            self._last_send = self._last_send_clock = -math.inf
         errors = self.team.formation.distance_errors(fleet.p_ned[:, :2], demand.scale)
         truth = self.truth_source() if self.truth_source is not None else None
         phase = self.phase  # after this tick's transitions: the recorder and the snapshot agree
@@ -599,7 +602,8 @@ class Runtime:
                 self.ids, modes, self._streaming_modes, coming_down, strict=True)
                 if mode != want and not down)
         fresh = bool(np.all(fleet.age <= self.team.config.safety.stale_after))
-        if not fresh or time.monotonic() - self._last_send > _GAP_S:
+        if not fresh or self._gap_seen or now - self._last_send_clock > _GAP_S:
+            self._gap_seen = False
             self.recovery.note_gap(now)
         healthy = fresh and fleet.located and not verdict.hold and not verdict.land
         if not self.recovery.update(now, out=out, healthy=healthy):
@@ -641,10 +645,15 @@ class Runtime:
         if self._vertical_calls:  # profiles whose vertical channel is not z itself
             only = self._vertical_from_profiles(z_ned, vertical)
         with self._send_lock:
-            wall = time.monotonic()
-            if wall - self._last_send > self._gap_max and math.isfinite(self._last_send):
-                self._gap_max = wall - self._last_send
-            self._last_send = wall
+            wall, now = time.monotonic(), self.clock.now()
+            # on the loop's clock, which the vehicles' timeouts run on (the simulator's in
+            # simulation: a stopped simulator is no gap, a stopped GCS is)
+            gap = now - self._last_send_clock  # inf: the first round of a stream
+            if math.isfinite(gap):
+                self._gap_max = max(self._gap_max, gap)
+                if gap > _GAP_S:
+                    self._gap_seen = True
+            self._last_send, self._last_send_clock = wall, now
             packed = self._packer.pack(wall, accel, vertical)
             failed = self._fanout.send(packed, SETPOINT_MESSAGE.crc_extra, only)
         for i, exc in failed.items():
