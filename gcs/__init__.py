@@ -15,6 +15,7 @@ The subpackages, lowest layer first (each imports only those before it):
 ``gcs.loop``        the 4 Hz loop: fleet table, safety rules, operator, phases, runtime
 ``gcs.flightlog``   the recorder, log index and decoding, flight metrics, reports
 ``gcs.app``         the GCS process assembled, the simulator as a child, headless flights
+``gcs.testing``     for integration tests: other hosts (network namespaces), lossy links
 ``gcs.cli``         the ``gcs`` command
 ==================  ======================================================================
 
@@ -27,7 +28,7 @@ import importlib
 from types import ModuleType
 
 __all__ = ["analysis", "app", "cli", "common", "config", "flightlog", "formation", "guidance",
-           "link", "loop", "transport", "wire"]
+           "link", "loop", "testing", "transport", "wire"]
 
 
 def __getattr__(name: str) -> ModuleType:

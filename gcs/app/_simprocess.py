@@ -16,6 +16,7 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import IO
 
@@ -51,13 +52,18 @@ class SimProcess:
         lockstep: let the GCS's clock acks pace the sim (headless, deterministic).
         extra: more command-line arguments for the sim.
         ready_timeout: how long to wait for its ready line, s.
+        wrap: turns the command into the one to run, e.g. on another host
+            (:meth:`gcs.testing.Host.command`); it must exec the sim, not fork it.
     """
 
     def __init__(self, config: str | Path, *, endpoint: str, speed: str = "1",
                  lockstep: bool = False, extra: tuple[str, ...] = (),
-                 ready_timeout: float = 60.0) -> None:
+                 ready_timeout: float = 60.0,
+                 wrap: Callable[..., list[str]] | None = None) -> None:
         cmd = [sys.executable, "-m", "sim", "--config", str(config), "--listen", endpoint,
                "--speed", speed, *(["--lockstep"] if lockstep else []), *extra]
+        if wrap is not None:
+            cmd = wrap(*cmd)
         self.endpoint = endpoint
         self._proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                       text=True, bufsize=1, preexec_fn=_die_with_parent)

@@ -1,0 +1,18 @@
+"""Tools for integration tests of the GCS: other hosts and lossy links on one machine.
+
+Modules:
+
+    ``_netns``  A second host on this machine: a network namespace joined to this one by a
+                veth pair.
+    ``_relay``  A TCP relay that delays and stalls a stream as a lossy radio link would.
+"""
+
+from gcs.testing._netns import Host, NetnsUnavailableError
+from gcs.testing._relay import RTO_S, LossyRelay
+
+__all__ = [
+    "RTO_S",
+    "Host",
+    "LossyRelay",
+    "NetnsUnavailableError",
+]
