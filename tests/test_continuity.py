@@ -23,6 +23,7 @@ from gcs.app import GcsApp, SimProcess, free_tcp_port
 from gcs.app._scenario import Scenario, Step, play
 from gcs.config import Team, load_team
 from gcs.loop import FleetState, Phase, RuntimeSnapshot
+from gcs.loop._runtime import HOLD_KP, HOLD_KV
 from gcs.transport import ZenohSettings
 from gcs.wire import SimMode
 from tests.test_safety_flight import break_vehicle, sim_sleep
@@ -136,7 +137,7 @@ def true_errors(snap: RuntimeSnapshot) -> float:
 
 def test_positions_that_disagree_with_the_shape_hold_the_team_instead_of_tearing_it() -> None:
     """Shape keeping on a vehicle 1.4 m out of place by its frame alone would drag the real
-    team apart; holding (velocity damping only) keeps it together, and says why."""
+    team apart; holding (each vehicle on its own point) keeps it together, and says why."""
     with formation() as app:
         shifted(app, lambda _t: 1.4)
         worst: list[float] = []
@@ -144,10 +145,32 @@ def test_positions_that_disagree_with_the_shape_hold_the_team_instead_of_tearing
         snap = app.runtime.snapshot
         assert snap.safety.hold and not snap.moving and snap.phase is Phase.FORMATION
         assert max(worst) < 0.3, max(worst)
-        v = snap.fleet.v_ned[:, :2]
-        np.testing.assert_allclose(snap.accel_cmd, -TEAM.config.guidance.c1 * v, atol=1e-9)
-        assert any("from the centroid" in t and "holding (velocity damping only)" in t
+        # each vehicle pulled back to its own point, with no term of another's position
+        held = app.runtime._hold_points
+        assert held is not None
+        want = -HOLD_KV * snap.fleet.v_ned[:, :2] - HOLD_KP * (snap.fleet.p_ned[:, :2] - held)
+        np.testing.assert_allclose(snap.accel_cmd, want, atol=1e-9)
+        assert any("from the centroid" in t and "holding (each vehicle on its own point)" in t
                    for t in texts(app))
+
+
+def test_a_start_out_of_shape_holds_at_hover_and_says_why() -> None:
+    """Vehicle 1 seen 1.4 m out of place from the start (its own origin): the team takes
+    off and holds at hover, each vehicle on its own point; the real shape does not drift."""
+    endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
+    with SimProcess(TEAM.source, endpoint=endpoint, speed="max", lockstep=True), \
+            GcsApp(TEAM, zenoh_settings=ZenohSettings(connect=(endpoint,)), sim_clock=True,
+                   lockstep=True) as app:
+        shifted(app, lambda _t: 1.4)
+        app.start()
+        play(Scenario(name="up", steps=(Step(action="arm"), Step(action="takeoff"))),
+             app.runtime, app.clock)
+        worst: list[float] = []
+        fly_sticks(app, 10.0, each=lambda s: worst.append(true_errors(s)))
+        snap = app.runtime.snapshot
+        assert snap.phase is Phase.HOVER and snap.safety.hold
+        assert max(worst) < 0.1, max(worst)
+        assert any("holding (each vehicle on its own point)" in t for t in texts(app))
 
 
 def test_a_deformation_that_keeps_growing_while_holding_lands_the_team() -> None:

@@ -113,7 +113,7 @@ def test_deformation_beyond_safe_bound_holds() -> None:
     assert v.events[0].reason is SafetyReason.DEFORMATION and v.events[0].vehicle == 1
     radius = np.linalg.norm(p[:, :2] - p[:, :2].mean(axis=0), axis=1)
     assert v.deformation == pytest.approx(radius.max())
-    assert "holding (velocity damping only)" in v.events[0].text
+    assert "holding (each vehicle on its own point)" in v.events[0].text
 
 
 def test_unknown_position_does_not_raise() -> None:

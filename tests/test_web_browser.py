@@ -35,7 +35,7 @@ from gcs.transport import ZenohSettings, open_session
 from gcs.wire import SimTruth, keys
 from tests.colours import hue_apart, hue_saturation_value
 from web import palette
-from web._browser_script import ABORT_ANSWERS
+from web._browser_script import ABORT_ANSWERS, RECONNECT_AFTER_S, STALE_AFTER_S
 from web.wireviewer import SceneRecord
 
 CHROMIUM = Path("/usr/bin/chromium")
@@ -187,7 +187,8 @@ SENT: dict[int, list[tuple[float, bytes]]] = {}
 """What each page (by ``id``) sent over its websocket: (time, raw msgpack frame)."""
 
 
-def open_page(browser, demo: Demo):  # type: ignore[no-untyped-def]
+def open_page(browser, demo: Demo, url: str = ""):  # type: ignore[no-untyped-def]
+    """A new browser page on the demo's page (or on ``url``, a way to it)."""
     page = browser.new_context(viewport={"width": 1400, "height": 800}).new_page()
     record = WIRES[id(page)] = SceneRecord()
     sent = SENT[id(page)] = []
@@ -201,7 +202,7 @@ def open_page(browser, demo: Demo):  # type: ignore[no-untyped-def]
             (time.monotonic(), payload if isinstance(payload, bytes) else payload.encode())))
 
     page.on("websocket", on_websocket)
-    page.goto(demo.url)
+    page.goto(url or demo.url)
     page.get_by_role("button", name="ABORT: hold, then land").wait_for(timeout=30_000)
     return page
 
@@ -368,6 +369,154 @@ def test_page_shows_the_team_and_the_payload(pilot, demo: Demo, screens: Path) -
     assert "nobody" in text(pilot, "control")
     assert banner(pilot).startswith("View only")
     assert pilot.get_by_role("button", name="arm", exact=True).is_disabled()
+
+
+class Relay:
+    """A TCP relay from a page to the demo that can stop delivering, both ways.
+
+    A stopped connection stays open and carries nothing: a half-open websocket, the
+    page's view frozen while the GCS and every other viewer carry on. Connections
+    opened after :meth:`stop` flow (the page's reconnect). Bytes the relay already
+    read when stopped are held, not lost, until :meth:`resume`.
+    """
+
+    def __init__(self, port: int) -> None:
+        self._port = port
+        self._listener = socket.create_server(("127.0.0.1", 0))
+        self.url = f"http://127.0.0.1:{self._listener.getsockname()[1]}"
+        self._pairs: list[tuple[socket.socket, socket.socket, threading.Event]] = []
+        self._lock = threading.Lock()
+        threading.Thread(target=self._accept, daemon=True, name="relay").start()
+
+    def _accept(self) -> None:
+        while True:
+            try:
+                near, _ = self._listener.accept()
+            except OSError:
+                return  # closed
+            far = socket.create_connection(("127.0.0.1", self._port))
+            flowing = threading.Event()
+            flowing.set()
+            for s in (near, far):
+                s.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            with self._lock:
+                self._pairs.append((near, far, flowing))
+            for src, dst in ((near, far), (far, near)):
+                threading.Thread(target=self._pump, args=(src, dst, flowing), daemon=True,
+                                 name="relay-pump").start()
+
+    @staticmethod
+    def _pump(src: socket.socket, dst: socket.socket, flowing: threading.Event) -> None:
+        try:
+            while data := src.recv(65536):
+                flowing.wait()
+                dst.sendall(data)
+            dst.shutdown(socket.SHUT_WR)
+        except OSError:
+            pass  # closed
+
+    @property
+    def connections(self) -> int:
+        """Connections opened through the relay so far (page loads and websockets)."""
+        with self._lock:
+            return len(self._pairs)
+
+    def stop(self) -> float:
+        """Stop every connection open now; return when (wall clock, s)."""
+        with self._lock:
+            for _, _, flowing in self._pairs:
+                flowing.clear()
+        return time.time()
+
+    def resume(self) -> float:
+        """Let every connection flow again; return when (wall clock, s)."""
+        with self._lock:
+            for _, _, flowing in self._pairs:
+                flowing.set()
+        return time.time()
+
+    def close(self) -> None:
+        self._listener.close()
+        with self._lock:
+            for near, far, flowing in self._pairs:
+                flowing.set()
+                near.close()
+                far.close()
+
+
+def freshness(page) -> dict[str, str]:  # type: ignore[no-untyped-def]
+    """The page's freshness badge: its text, state ("fresh", "stale"), when it last turned
+    stale and fresh (the page's wall clock, ms), its forced reconnects, its colour."""
+    return page.locator("[data-gcs=freshness]").evaluate(
+        """b => ({text: b.textContent, state: b.dataset.gcsState || "",
+                  staleAt: b.dataset.gcsStaleAt || "", freshAt: b.dataset.gcsFreshAt || "",
+                  reconnects: b.dataset.gcsReconnects || "0", time: b.dataset.gcsTime || "",
+                  background: getComputedStyle(b).backgroundColor})""")
+
+
+STALE_SHOWN = "() => document.querySelector('[data-gcs=freshness]').dataset.gcsState === 'stale'"
+"""True once the page's badge says STALE (polled in the page, so the test sees it at once)."""
+
+
+def is_fresh(page) -> bool:  # type: ignore[no-untyped-def]
+    badge = freshness(page)
+    return badge["state"] == "fresh" and re.fullmatch(r"data \d+\.\d s old", badge["text"]) \
+        is not None
+
+
+def test_a_viewer_that_stops_receiving_says_stale_and_reconnects(browser, pilot,
+                                                                 demo: Demo) -> None:
+    """A viewer reaches the demo through a relay that stops delivering (its websocket stays
+    open, nothing arrives): its badge turns red, STALE, within a second of the stop, while
+    the pilot's page stays fresh; updates flowing again make it fresh; stopped for good,
+    the page opens a fresh websocket by itself and is fresh again."""
+    relay = Relay(int(demo.url.rsplit(":", 1)[1]))
+    page = open_page(browser, demo, url=relay.url)
+    sockets: list[str] = []
+    page.on("websocket", lambda ws: sockets.append(ws.url))
+    try:
+        wait_for(lambda: is_fresh(page), 15, "the badge fresh", lambda: str(freshness(page)))
+        ok = freshness(page)
+        gcs_time = float(ok["time"])
+        assert ok["background"] != "rgb(201, 42, 42)", ok
+
+        # the relay stops: STALE, in red, about a second after the last beat, which came
+        # before the stop (slack: the page applies what it receives in its render loop)
+        time.sleep(0.5)
+        assert is_fresh(page), freshness(page)
+        stopped = relay.stop()
+        page.wait_for_function(STALE_SHOWN, polling=20, timeout=5_000)
+        stale = freshness(page)
+        resumed = relay.resume()  # at once: well before the page gives up on its socket
+        after = float(stale["staleAt"]) / 1e3 - stopped
+        print(f"STALE shown {after:.2f} s after the stop: {stale['text']!r}")
+        assert 0.0 < after <= STALE_AFTER_S + 0.3, f"STALE {after:.2f} s after the stop"
+        assert re.fullmatch(r"STALE — no update for \d\.\d s", stale["text"]), stale
+        assert stale["background"] == "rgb(201, 42, 42)", stale
+        assert is_fresh(pilot), f"the pilot's page: {freshness(pilot)}"  # the GCS goes on
+
+        # updates flowed again at once: fresh, over the same socket
+        assert resumed - stopped < RECONNECT_AFTER_S - 1.0, resumed - stopped
+        wait_for(lambda: is_fresh(page), 5, "fresh again", lambda: str(freshness(page)))
+        back = float(freshness(page)["freshAt"]) / 1e3 - resumed
+        print(f"fresh {back:.2f} s after the relay resumed")
+        assert float(freshness(page)["time"]) > gcs_time
+        assert freshness(page)["reconnects"] == "0" and not sockets, (freshness(page), sockets)
+
+        # stopped for good: after RECONNECT_AFTER_S the page reconnects, over a new socket
+        stopped = relay.stop()
+        wait_for(lambda: freshness(page)["reconnects"] != "0", RECONNECT_AFTER_S + 3,
+                 "a forced reconnect", lambda: str(freshness(page)))
+        wait_for(lambda: is_fresh(page), 20, "fresh after the reconnect",
+                 lambda: f"{freshness(page)}; sockets {sockets}")
+        back = float(freshness(page)["freshAt"]) / 1e3 - stopped
+        print(f"stopped for good: reconnected, fresh {back:.2f} s after the stop "
+              f"({freshness(page)['reconnects']} forced reconnect(s), new sockets {sockets})")
+        assert len(sockets) >= 1, sockets
+        assert back > RECONNECT_AFTER_S, back
+    finally:
+        page.context.close()
+        relay.close()
 
 
 def press_phase(page, button: str, phase: str, demo: Demo,  # type: ignore[no-untyped-def]

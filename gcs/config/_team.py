@@ -192,8 +192,9 @@ class SafetyConfig:
     recover_after: float = field(doc="with automatic recovery, every link fresh this long "
                                  "before the vehicles are re-engaged, s", default=1.0, gt=0.0)
     deformed_land_growth: float = field(
-        doc="while the team holds a shape deformed beyond the analysis' safe bound (velocity "
-            "damping only), the team lands if the deformation grows by this much more, m",
+        doc="while the team holds a shape deformed beyond the analysis' safe bound (each "
+            "vehicle on its own point), the team lands if the deformation grows by this much "
+            "more, m",
         default=0.3, gt=0.0)
 
     def __post_init__(self) -> None:

@@ -4,7 +4,7 @@ Each tick (scheduled on a :class:`~gcs.loop.Clock`, wall or simulator time):
 
 1. read the fleet's latest telemetry (:class:`gcs.loop.FleetTable`);
 2. apply the safety rules (:func:`gcs.loop._safety.evaluate`): freeze the motion,
-   hold a deformed team (velocity damping only) or land the team; re-engage
+   hold a deformed team (each vehicle on its own point) or land the team; re-engage
    vehicles that dropped to hold on a setpoint gap (:mod:`gcs.loop._recovery`);
 3. take the operator's command, limit it at the geofence
    (:mod:`gcs.loop._geofence`), run the guidance (relative positions, own
@@ -57,8 +57,12 @@ from gcs.loop._safety import SafetyVerdict, evaluate
 from gcs.loop._stepgate import HOLD_CAP_S, StepGate
 from gcs.wire import SETPOINT_MESSAGE, SetpointPacker, SimTruth
 
-__all__ = ["HELD_SETPOINT_S", "Event", "FlightRecorder", "Runtime", "RuntimeSnapshot",
-           "TickStats"]
+__all__ = ["HELD_SETPOINT_S", "HOLD_KP", "HOLD_KV", "Event", "FlightRecorder", "Runtime",
+           "RuntimeSnapshot", "TickStats"]
+
+HOLD_KP, HOLD_KV = 0.25, 1.0
+"""Gains of a held team's pull back to each vehicle's own point, 1/s^2 and 1/s (critically
+damped, slow beside the 4 Hz tick)."""
 
 HELD_SETPOINT_S = 1.0
 """Longest a tick's acceleration setpoint is re-sent, s of the loop's clock; past it, a late
@@ -212,6 +216,7 @@ class Runtime:
                                  settle=safety.recover_after)
         """Re-engages vehicles that dropped to hold on a setpoint gap."""
         self._hold_from: float | None = None  # deformation when the team began to hold, m
+        self._hold_points: np.ndarray | None = None  # (n, 2) where each vehicle holds, m
         self._fence_text = ""
         self._handing_over = False  # taking off: the vehicles are switching to offboard
         self.resends = 0
@@ -552,9 +557,9 @@ class Runtime:
     def _stream(self, fleet: FleetState, demand: MotionDemand, op: OperatorSnapshot, *,
                 hold: bool = False) -> tuple[np.ndarray, float]:
         """Guidance and one setpoint per vehicle (errors are per vehicle): the accelerations
-        sent and the largest one's norm. ``hold``: velocity damping only."""
+        sent and the largest one's norm. ``hold``: each vehicle holds where it was."""
         if hold:
-            accel = self._damping(fleet)
+            accel = self._damping(fleet, self._hold_points)
             largest = finite_max_norm(accel)
         elif fleet.located:
             accel = self.guidance.accelerations(fleet.p_ned[:, :2], fleet.v_ned[:, :2],
@@ -569,12 +574,23 @@ class Runtime:
         """The altitude setpoint: the operator's, never above the geofence's ceiling."""
         return min(op.altitude, self.team.config.safety.geofence_altitude)
 
-    def _damping(self, fleet: FleetState) -> np.ndarray:
-        """Velocity damping only, ``-c1 v`` saturated (NaN velocity: zero): the hold that
-        cannot amplify a deformation, whatever the positions say."""
+    def _damping(self, fleet: FleetState, hold_points: np.ndarray | None = None) -> np.ndarray:
+        """Velocity damping, saturated (NaN: zero), and with ``hold_points`` (n, 2) a pull of
+        each vehicle back to its own point: the hold that cannot amplify a deformation
+        whatever the positions say, since no vehicle's command depends on another's
+        position (a frame that disagrees with the others' changes nothing).
+
+        Damping alone let the shape drift with the wind (0.33 m in 10 s at hover in the
+        simulator); the pull is critically damped (``HOLD_KP``, ``HOLD_KV``).
+        """
         v = np.nan_to_num(fleet.v_ned[:, :2], nan=0.0, posinf=0.0, neginf=0.0)
+        if hold_points is None:
+            accel = -self.guidance.c1 * v
+        else:
+            offset = np.nan_to_num(fleet.p_ned[:, :2] - hold_points, nan=0.0)
+            accel = -HOLD_KV * v - HOLD_KP * offset
         lim = self.team.config.limits
-        return saturate(-self.guidance.c1 * v, norm_max=lim.accel_norm, axis_max=lim.accel_axis)
+        return saturate(accel, norm_max=lim.accel_norm, axis_max=lim.accel_axis)
 
     def _fence(self, fleet: FleetState, demand: MotionDemand) -> FenceVerdict:
         """The demand limited by the geofence (the payload counts where it is known)."""
@@ -618,10 +634,12 @@ class Runtime:
     def _watch_deformation(self, verdict: SafetyVerdict, phase: Phase) -> None:
         """Land a held team whose deformation keeps growing."""
         if not verdict.hold:
-            self._hold_from = None
+            self._hold_from = self._hold_points = None
             return
         if self._hold_from is None:
             self._hold_from = verdict.deformation
+            fleet = self.fleet_table.read(self.clock.now())
+            self._hold_points = fleet.p_ned[:, :2].copy()
             return
         growth = self.team.config.safety.deformed_land_growth
         if verdict.deformation > self._hold_from + growth and phase.airborne \

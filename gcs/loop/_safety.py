@@ -7,8 +7,8 @@ Every tick the loop asks :func:`evaluate` what the team may do:
 * a vehicle silent for ``land_after``: the whole team lands;
 * a vehicle farther from the team's centroid than the analysis' safe bound
   (beyond it the ropes pull harder than the horizontal force left at the bank
-  limit minus the largest commanded acceleration): the team holds, its
-  commands damping velocity only (the shape-keeping terms would amplify a
+  limit minus the largest commanded acceleration): the team holds, each
+  vehicle on its own point (the shape-keeping terms would amplify a
   deformation the GCS cannot trust, as with positions in disagreeing frames),
   and lands if the deformation keeps growing (the loop tracks the growth);
 * while the team flies on the GCS's setpoints, a vehicle that left the mode
@@ -67,7 +67,7 @@ class SafetyVerdict:
     freeze: bool  # the operator's motion stops (the shape is kept)
     land: bool
     events: tuple[SafetyEvent, ...]
-    hold: bool = False  # commands damp velocity only (deformed beyond the safe bound)
+    hold: bool = False  # each vehicle holds its own point (deformed beyond the safe bound)
     deformation: float = float("nan")  # largest distance from the centroid, m (NaN: unknown)
 
 
@@ -116,8 +116,8 @@ def evaluate(cfg: SafetyConfig, ids: Sequence[int], age: np.ndarray, p_ned: np.n
         vid = ids[i]
         events.append(SafetyEvent(SafetyReason.DEFORMATION, vid,
                                   f"vehicle {vid}: {r[i]:.2f} m from the centroid, "
-                                  f"safe bound {safe_radius:.2f} m: holding (velocity "
-                                  f"damping only)"))
+                                  f"safe bound {safe_radius:.2f} m: holding (each vehicle "
+                                  f"on its own point)"))
     for i, (mode, want) in enumerate(zip(modes, expected, strict=True)):
         if mode == want or flags[i] & STALE:  # a silent vehicle is reported as such, above
             continue
