@@ -89,6 +89,33 @@ def test_a_lost_second_on_every_radio_is_flown_through() -> None:
         assert app.runtime.recovery.attempts == 1
 
 
+def test_setpoints_lost_on_the_way_are_told_by_the_vehicle_and_recovered() -> None:
+    """Vehicle 2's setpoints vanish on the way for 1 s while its telemetry flows and the
+    GCS sends on time: only the vehicle knows; its failsafe message (as PX4 announces one)
+    tells the GCS that the stream, not a pilot, took it out of OFFBOARD."""
+    with formation() as app:
+        fly_sticks(app, 1.0, forward=0.6)
+        fanout = app.runtime._fanout
+        send = fanout.send
+        lost = threading.Event()
+
+        def lossy(packed: object, crc_extra: int, only: object = None) -> object:
+            if lost.is_set():
+                only = [0, 2, 3] if only is None else [i for i in only if i != 1]
+            return send(packed, crc_extra, only)
+
+        fanout.send = lossy  # type: ignore[method-assign]
+        lost.set()
+        fly_sticks(app, 1.0, forward=0.6)
+        lost.clear()
+        assert app.runtime.snapshot.fleet.modes[1] == "HOLD"
+        fly_sticks(app, 3.0, forward=0.6)
+        snap = app.runtime.snapshot
+        assert snap.fleet.modes == OFFBOARD and snap.moving
+        assert app.runtime.recovery.attempts == 1
+        assert any("re-engaging vehicles 2" in t for t in texts(app))
+
+
 def test_with_the_operator_policy_the_team_waits_for_resume_and_says_so() -> None:
     with formation(with_safety(TEAM, recovery="operator")) as app:
         lose_every_radio(app, 1.2)

@@ -6,6 +6,9 @@ viewer, so what the server sends is really serialised, received and decoded.
 
 from __future__ import annotations
 
+import collections
+import re
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -26,7 +29,8 @@ from web._actions import OperatorActions
 from web._control_lock import ControlLock
 from web._frame import SceneFrame
 from web._panel import FOLLOW_STEP, ControlPanel
-from web.wireviewer import WireViewer
+from web._viser_threads import LoopEvent, wake_on_loop
+from web.wireviewer import WireViewer, decode_window
 
 ROOT = Path(__file__).resolve().parents[1]
 TEAM = load_team(ROOT / "configs" / "bebop_square.yaml")
@@ -168,6 +172,122 @@ def test_the_page_draws_at_its_rate_beside_a_running_loop() -> None:
         finally:
             viewer.close()
             ui.close()
+
+
+class BeatViewer(WireViewer):
+    """A viewer that also keeps the page's beats (the news of its freshness badge)."""
+
+    def __init__(self, port: int) -> None:
+        self.beats: list[tuple[float, float | None, float]] = []
+        """(arrival, GCS time, age) of every beat received."""
+        super().__init__(port)
+
+    def take(self, data: bytes, at: float) -> None:
+        super().take(data, at)
+        for m in decode_window(data):
+            if m.get("type") == "RunJavascriptMessage" and (
+                    beat := re.fullmatch(r".*\.beat\((\S+), (\S+)\);", m["source"])):
+                t = None if beat[1] == "null" else float(beat[1])
+                self.beats.append((at, t, float(beat[2])))
+
+
+def test_every_viewer_gets_a_beat_with_the_loops_ticks() -> None:
+    """The page's freshness badge hears from the GCS with each tick (4 Hz), and at least
+    every 0.25 s whatever the loop does: before the loop ticks, the beats say how long
+    the page has had no data."""
+    settings = ZenohSettings(mode="peer", connect=())
+    with GcsApp(TEAM, zenoh_settings=settings) as app:
+        ui = WebUi(app, port=free_tcp_port())
+        viewers = [BeatViewer(ui.server.get_port()) for _ in range(2)]
+        try:
+            for viewer in viewers:
+                viewer.report_camera((-3.0, -1.0, -2.0), (0.0, 0.0, 0.0))
+            ui.start()  # the loop not started yet: no tick
+            time.sleep(1.5)
+            ticking = time.monotonic()
+            app.start()
+            time.sleep(2.5)
+            for viewer in viewers:
+                before = [b for b in viewer.beats if b[0] < ticking]
+                after = [b for b in viewer.beats if b[0] > ticking + 0.5]
+                assert before and all(t is None for _, t, _ in before), before
+                ages = [age for _, _, age in before]
+                assert ages == sorted(ages) and ages[-1] > 1.0, ages  # no data, ever older
+                arrivals = np.array([at for at, _, _ in viewer.beats])
+                assert np.diff(arrivals).max() < 0.5, np.diff(arrivals)  # even with no tick
+                times = [t for _, t, _ in after]
+                assert len(after) >= 6 and None not in times, after  # 4 Hz: about 8
+                assert times == sorted(times) and times[-1] - times[0] > 1.0, times
+                assert max(age for _, _, age in after) < 0.3, after  # each soon after its tick
+            # every buffer of the page wakes its sender on viser's loop (web._viser_threads)
+            websock = ui.server._websock_server
+            buffers = [websock._broadcast_buffer] + [
+                state.message_buffer for state in websock._client_state_from_id.values()]
+            assert len(buffers) == 3
+            assert all(isinstance(b.message_event, LoopEvent) for b in buffers)
+        finally:
+            for viewer in viewers:
+                viewer.close()
+            ui.close()
+
+
+class SlowRegistration(collections.deque):  # type: ignore[type-arg]
+    """An asyncio.Event's waiters whose next registration (on viser's loop) takes 50 ms:
+    the moment the loop thread is between finding the event clear and adding its
+    waiter, made long enough for another thread's write to land in it."""
+
+    def __init__(self, waiters: collections.deque) -> None:  # type: ignore[type-arg]
+        super().__init__(waiters)
+        self.armed = False
+        self.registering = threading.Event()
+
+    def append(self, waiter: object) -> None:
+        if self.armed:
+            self.armed = False
+            self.registering.set()
+            time.sleep(0.05)
+        super().append(waiter)
+
+
+def test_a_write_from_another_thread_always_reaches_the_viewer(
+        server: viser.ViserServer) -> None:
+    """viser's push sets its asyncio.Event from the writing thread: a write landing while
+    the loop registers its sender's waiter set the flag too early, the waiter was never
+    woken, and that viewer's buffer sent nothing more, ever (the flag stays set, nobody
+    clears it). With ``wake_on_loop`` the loop sets the event itself."""
+    wake_on_loop(server)
+    viewer = WireViewer(server.get_port())
+    try:
+        client = connected_client(server, viewer)
+        number = client.gui.add_number("n", 0)  # the viewer's own buffer, as its panel
+        viewer.settled(0.3)
+        buffer = client._websock_connection.get_message_buffer()
+        done = threading.Event()
+        waiters: list[SlowRegistration] = []
+
+        def slow() -> None:  # on viser's loop: its sender is parked on the event
+            event = buffer.message_event
+            event._waiters = SlowRegistration(event._waiters)  # type: ignore[attr-defined]
+            waiters.append(event._waiters)  # type: ignore[attr-defined]
+            done.set()
+
+        buffer.event_loop.call_soon_threadsafe(slow)
+        assert done.wait(5.0)
+        (registration,) = waiters
+        for k in range(3):
+            registration.armed = True
+            registration.registering.clear()
+            number.value = 10 * k + 1  # wakes the sender: it sends, then waits again
+            assert registration.registering.wait(5.0), "the sender never waited again"
+            before = viewer.received
+            number.value = 10 * k + 2  # lands while the loop registers the sender's waiter
+            deadline = time.monotonic() + 3.0
+            while viewer.received == before:
+                assert time.monotonic() < deadline, (
+                    f"write {k}: never sent; the event {buffer.message_event}")
+                time.sleep(0.01)
+    finally:
+        viewer.close()
 
 
 def connected_client(server: viser.ViserServer, viewer: WireViewer) -> viser.ClientHandle:

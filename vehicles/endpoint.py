@@ -45,6 +45,7 @@ from dataclasses import dataclass
 from typing import TypeAlias
 
 from gcs.wire import (
+    OFFBOARD_LOST_TEXT,
     AccelSetpoint,
     CommandResult,
     DecodeStats,
@@ -54,6 +55,7 @@ from gcs.wire import (
     SetpointKind,
     Severity,
     SigningKey,
+    SimMode,
 )
 from vehicles._autopilot import Autopilot
 from vehicles._battery import Battery
@@ -69,6 +71,7 @@ COMPONENT_ID = 1
 """Component id of the simulated autopilot (``MAV_COMP_ID_AUTOPILOT1``)."""
 
 _STATUSTEXT_LEN = 50
+_OFFBOARD, _HOLD = int(SimMode.OFFBOARD), int(SimMode.HOLD)
 _REFUSAL_REPORT_PERIOD = 1.0
 """At most one STATUSTEXT per refusal reason per this much sim time, s (all are counted)."""
 
@@ -291,6 +294,7 @@ class VehicleEndpoint:
         messages: list[MavMessage] = []
         self._batch = messages
         try:
+            self._report_failsafe()
             self._heartbeat_if_mode_changed(t)
             due = self._streams.due(t)
             if due:
@@ -301,6 +305,15 @@ class VehicleEndpoint:
             self._batch = None
         if messages:
             self._send_now(*messages)
+
+    def _report_failsafe(self) -> None:
+        """Say why the vehicle left OFFBOARD on its own, as PX4 announces a failsafe: between
+        commands only the setpoint timeout moves OFFBOARD to HOLD (a command's mode change
+        is reported as it is handled). A ground station tells a lost stream from a pilot's
+        switch by it."""
+        mode = int(self._autopilot.state.mode[self._index])
+        if self._reported_mode == _OFFBOARD and mode == _HOLD:
+            self._status_text(Severity.WARNING, OFFBOARD_LOST_TEXT)
 
     def _heartbeat_if_mode_changed(self, t: float) -> None:
         mode = int(self._autopilot.state.mode[self._index])

@@ -55,7 +55,7 @@ from gcs.loop._phases import Action, Phase, PhaseError, next_phase
 from gcs.loop._recovery import Recovery
 from gcs.loop._safety import SafetyVerdict, evaluate
 from gcs.loop._stepgate import HOLD_CAP_S, StepGate
-from gcs.wire import SETPOINT_MESSAGE, SetpointPacker, SimTruth
+from gcs.wire import SETPOINT_MESSAGE, SetpointPacker, SimTruth, StatusText, TelemetryRecord
 
 __all__ = ["HELD_SETPOINT_S", "HOLD_KP", "HOLD_KV", "Event", "FlightRecorder", "Runtime",
            "RuntimeSnapshot", "TickStats"]
@@ -215,6 +215,8 @@ class Runtime:
         self.recovery = Recovery(automatic=safety.recovery == "auto",
                                  settle=safety.recover_after)
         """Re-engages vehicles that dropped to hold on a setpoint gap."""
+        for profile in self._profile_list:  # a vehicle saying its setpoints stopped
+            profile.link.add_record_listener(self._on_record)
         self._hold_from: float | None = None  # deformation when the team began to hold, m
         self._hold_points: np.ndarray | None = None  # (n, 2) where each vehicle holds, m
         self._fence_text = ""
@@ -630,6 +632,12 @@ class Runtime:
                             f"{self.recovery.settle:g} s: re-engaging vehicles "
                             f"{', '.join(map(str, self.recovery.after_gap))}")
         self.gate.submit(self._pool, self._run_action, Action.RESUME, self.phase)
+
+    def _on_record(self, record: TelemetryRecord) -> None:
+        """A vehicle's failsafe message about lost setpoints is a gap (a link's thread): it
+        left its mode because of the stream, not because someone switched it."""
+        if isinstance(record, StatusText) and record.setpoints_lost:
+            self.recovery.note_gap(self.clock.now())
 
     def _watch_deformation(self, verdict: SafetyVerdict, phase: Phase) -> None:
         """Land a held team whose deformation keeps growing."""

@@ -68,10 +68,12 @@ from gcs.wire._signing import SigningKey, load_signing_key
 from gcs.wire._simtruth import SimTruth, vec3
 from gcs.wire._stamp import crc_accumulate
 from gcs.wire._telemetry import (
+    OFFBOARD_LOST_TEXT,
     Attitude,
     Heartbeat,
     LocalPosition,
     Severity,
+    StatusText,
     SystemStatus,
     Telemetry,
     TelemetryRecord,
@@ -83,6 +85,7 @@ __all__ = [
     "CUSTOM_MODE_ENABLED",
     "DEFAULT_GCS_COMPONENT_ID",
     "DEFAULT_GCS_SYSTEM_ID",
+    "OFFBOARD_LOST_TEXT",
     "SAFETY_ARMED",
     "SETPOINT_MESSAGE",
     "AccelSetpoint",
@@ -104,6 +107,7 @@ __all__ = [
     "SigningKey",
     "SimMode",
     "SimTruth",
+    "StatusText",
     "SystemStatus",
     "Telemetry",
     "TelemetryRecord",

@@ -9,6 +9,7 @@ navigation frame, FRD body frame, SI units, radians.
 from __future__ import annotations
 
 import math
+import re
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -18,6 +19,7 @@ from gcs.wire._dialect import MavMessage
 from gcs.wire._modes import SAFETY_ARMED
 
 __all__ = [
+    "OFFBOARD_LOST_TEXT",
     "Attitude",
     "Heartbeat",
     "Imu",
@@ -132,6 +134,19 @@ class StatusText:
     severity: Severity
     text: str
     received_at: float
+
+    @property
+    def setpoints_lost(self) -> bool:
+        """Whether the autopilot says it left offboard because the setpoints stopped (our
+        simulated vehicle's :data:`OFFBOARD_LOST_TEXT`, PX4's offboard-loss failsafe)."""
+        return _SETPOINTS_LOST.search(self.text) is not None
+
+
+OFFBOARD_LOST_TEXT = "Failsafe: offboard setpoints lost, holding"
+"""What a simulated vehicle says when its setpoint timeout sends it from OFFBOARD to HOLD."""
+
+_SETPOINTS_LOST = re.compile(r"offboard.*(lost|loss|signal|timeout)|setpoints? (lost|timeout)",
+                             re.IGNORECASE)
 
 
 TelemetryRecord = Heartbeat | LocalPosition | Attitude | Imu | SystemStatus | StatusText
