@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import html as html_lib
 import math
 import re
@@ -14,7 +15,7 @@ from gcs.analysis import analyze
 from gcs.config import load_team
 from gcs.guidance import MotionDemand
 from gcs.link import LinkHealth
-from gcs.loop import FleetState, OperatorSnapshot, Phase, RuntimeSnapshot, TickStats
+from gcs.loop import FenceVerdict, FleetState, OperatorSnapshot, Phase, RuntimeSnapshot, TickStats
 from gcs.loop._runtime import Event
 from gcs.loop._safety import SafetyEvent, SafetyReason, SafetyVerdict
 from gcs.wire import SimTruth
@@ -114,6 +115,25 @@ def test_summary_shows_a_frozen_or_landing_team() -> None:
     landing = SafetyVerdict(freeze=True, land=True, events=(event,))
     assert "landing the team" in summary_html(snapshot(safety=landing), loop=None,
                                               control="", ui=None)
+
+
+def test_recovery_hold_and_geofence_are_banners() -> None:
+    """What the operator must act on or know at once is a banner, not a line that scrolls
+    away in the events: vehicles waiting for Resume, a held team, the geofence."""
+    plain = summary_html(snapshot(), loop=None, control="", ui=None)
+    assert "data-gcs-banner" not in plain
+    waiting = dataclasses.replace(
+        snapshot(), recovery="vehicles 2, 3 out of the streaming mode: press Resume to fly "
+                             "them again")
+    html_ = summary_html(waiting, loop=None, control="", ui=None)
+    assert 'data-gcs-banner="recovery"' in html_ and "press Resume" in html_
+    held = SafetyVerdict(freeze=True, land=False, events=(), hold=True, deformation=1.2)
+    html_ = summary_html(snapshot(safety=held), loop=None, control="", ui=None)
+    assert 'data-gcs-banner="hold"' in html_ and "HOLDING" in html_
+    fence = FenceVerdict(MotionDemand(), near=("east",), outside=(), above=False)
+    html_ = summary_html(dataclasses.replace(snapshot(), fence=fence), loop=None, control="",
+                         ui=None)
+    assert 'data-gcs-banner="fence"' in html_ and "at the geofence (east)" in html_
 
 
 def test_vehicle_rows_show_state_mode_battery_tilt_rope_and_link() -> None:

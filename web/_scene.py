@@ -60,10 +60,12 @@ class SceneView:
         view: the team.
         mesh: vertices and faces of the vehicle model (FRD, m).
         geofence_xy: half-size of the horizontal geofence drawn on the ground, m.
+        geofence_margin: its warning margin, drawn as a thinner box inside it, m (0: none).
     """
 
     def __init__(self, scene: viser.SceneApi, view: TeamView,
-                 mesh: tuple[np.ndarray, np.ndarray], *, geofence_xy: float) -> None:
+                 mesh: tuple[np.ndarray, np.ndarray], *, geofence_xy: float,
+                 geofence_margin: float = 0.0) -> None:
         n = view.n
         scene.set_up_direction("-z")
         # no shadows: they cost every viewer's GPU (or CPU, without one) for little here;
@@ -73,11 +75,14 @@ class SceneView:
         side = 2.0 * geofence_xy + 2.0
         scene.add_grid("/ground", width=side, height=side, plane="xy", cell_size=0.5,
                        section_size=1.0, shadow_opacity=0.0)
-        g = geofence_xy
-        corners = np.array([[g, g, 0.0], [g, -g, 0.0], [-g, -g, 0.0], [-g, g, 0.0]])
-        scene.add_line_segments("/ground/geofence",
-                                np.stack((corners, np.roll(corners, -1, axis=0)), axis=1),
-                                palette.GEOFENCE, thickness=0.02)
+        for name, g, thickness in (("geofence", geofence_xy, 0.02),
+                                   ("geofence_margin", geofence_xy - geofence_margin, 0.006)):
+            if name == "geofence_margin" and not geofence_margin > 0.0:
+                continue
+            corners = np.array([[g, g, 0.0], [g, -g, 0.0], [-g, -g, 0.0], [-g, g, 0.0]])
+            scene.add_line_segments(f"/ground/{name}",
+                                    np.stack((corners, np.roll(corners, -1, axis=0)), axis=1),
+                                    palette.GEOFENCE, thickness=thickness)
         vertices, faces = mesh
         self._vehicles = scene.add_batched_meshes_simple(
             "/team/vehicles", vertices, faces, batched_wxyzs=np.tile([1.0, 0, 0, 0], (n, 1)),

@@ -94,19 +94,24 @@ def summary_html(snap: RuntimeSnapshot | None, *, loop: TickStats | None, contro
     verdict = snap.safety
     if verdict.land:
         safety = '<b style="color:#c0392b">landing the team</b>'
+    elif verdict.hold:
+        safety = '<b style="color:#c0392b">holding: deformed beyond the safe bound</b>'
     elif verdict.freeze:
         safety = '<b style="color:#e67e22">motion frozen</b>'
     else:
         safety = '<span style="color:#27ae60">ok</span>'
     timing = "" if loop is None else (
         f"loop {loop.ticks} ticks · compute p99 {1e3 * loop.compute_p99:.1f} ms · "
-        f"jitter p99 {1e3 * loop.jitter_p99:.0f} ms · overruns {loop.overruns}")
+        f"jitter p99 {1e3 * loop.jitter_p99:.0f} ms · overruns {loop.overruns} · "
+        f"longest stall {loop.stall_max:.2f} s · longest setpoint gap "
+        f"{loop.setpoint_gap_max:.2f} s")
     ui_text = "" if ui is None else (f' · UI <span data-gcs="ui-rate">{ui.rate_hz:.1f}</span> Hz, '
                                      f"frame {ui.draw_ms:.2f} ms (p99 {ui.draw_p99_ms:.2f})")
     worst = np.nanmax(np.abs(snap.distance_errors)) if np.isfinite(snap.distance_errors).any() \
         else math.nan
     return (
         '<div style="padding:2px 8px;font-size:0.85em;line-height:1.5">'
+        f'{banners_html(snap)}'
         f'<div>phase <b data-gcs="phase" style="font-size:1.2em">{snap.phase.text}</b>'
         f' · safety {safety} · worst distance error '
         f'<span data-gcs="worst-error">{_num(worst, ".3f", " m")}</span></div>'
@@ -116,6 +121,25 @@ def summary_html(snap: RuntimeSnapshot | None, *, loop: TickStats | None, contro
         f'<div>ropes {rope_legend(_truth_covers(snap.truth, snap.fleet.ids))}</div>'
         f'<div style="color:#78909c">{timing}{ui_text}</div>'
         '</div>')
+
+
+def banners_html(snap: RuntimeSnapshot) -> str:
+    """What the operator must see at once, one banner each: vehicles waiting to be flown
+    again (and whether to press Resume), a held team, the geofence."""
+    out = []
+    if snap.recovery:
+        colour = "#e67e22" if "re-engaging" in snap.recovery or "waiting" in snap.recovery \
+            else "#c0392b"
+        out.append((colour, "recovery", snap.recovery))
+    if snap.safety.hold:
+        out.append(("#c0392b", "hold", "HOLDING: the team is deformed beyond the analysis' "
+                    "safe bound; each vehicle holds its point (land if it grows)"))
+    if snap.fence is not None and snap.fence.text:
+        out.append(("#e67e22", "fence", snap.fence.text))
+    return "".join(
+        f'<div data-gcs-banner="{key}" style="background:{colour};color:#fff;'
+        f'font-weight:bold;padding:3px 8px;margin:2px 0;border-radius:3px">'
+        f"{html.escape(text)}</div>" for colour, key, text in out)
 
 
 def vehicles_html(snap: RuntimeSnapshot | None, *, health: Mapping[int, LinkHealth],
