@@ -508,7 +508,7 @@ class Runtime:
                 demand = fence.demand
             accel, self._accel_last = self._stream(fleet, demand, op, hold=verdict.hold)
             self._streamed, self._streamed_at = accel, now
-            self._advance(phase, op, now)
+            self._advance(phase, op, now, fleet)
         else:
             accel, self._accel_last = np.zeros((fleet.n, 2)), 0.0
             # the next stream starts afresh (no gap to measure)
@@ -733,8 +733,14 @@ class Runtime:
         self.resends += 1
         return True
 
-    def _advance(self, phase: Phase, op: OperatorSnapshot, now: float) -> None:
-        reached = abs(op.altitude - op.altitude_target) < 1e-6
+    def _advance(self, phase: Phase, op: OperatorSnapshot, now: float,
+                 fleet: FleetState) -> None:
+        # The ramp's end and the team's own altitude: a team held up (vehicles in hold
+        # after a gap) has not lifted or set down its payload when the ramp ends.
+        target = min(op.altitude_target, self.team.config.safety.geofence_altitude)
+        there = bool(np.all(np.abs(-fleet.p_ned[:, 2] - target)
+                            < self.team.config.flight.altitude_tolerance))
+        reached = abs(op.altitude - op.altitude_target) < 1e-6 and there
         if phase is Phase.LIFTING and reached:
             self._set_phase(Phase.FORMATION)
         elif phase is Phase.SETTING_DOWN and reached:
