@@ -6,6 +6,7 @@ second, independent zenoh session, so a test passes only if the real
 simulated vehicles moved. What each browser received over its websocket is
 decoded too (``web.wireviewer.SceneRecord``): the scene it holds and how many
 updates a second reach it. The tests share one demo and run in file order:
+a viewer whose connection stops (its badge says STALE, then it reconnects),
 fly from the page, then a second viewer, then the abort (from the keyboard, and
 the always-visible button at a small window with the panels collapsed), then
 Ctrl-C, then the button of a page whose server is gone. Screenshots go to the
@@ -767,6 +768,13 @@ def test_the_abort_stays_in_view_and_any_viewer_aborts(pilot, viewer, demo: Demo
             on_top = pilot.evaluate("([x, y]) => document.elementFromPoint(x, y).dataset.gcs",
                                     [box["x"] + box["width"] / 2, box["y"] + box["height"] / 2])
             assert on_top == "abort", f"ABORT at {box} is covered"
+            # the freshness badge: on screen too, above the button, never over it
+            badge = pilot.locator("[data-gcs=freshness]")
+            over = badge.bounding_box()
+            assert over is not None and badge.is_visible(), "no freshness badge on the page"
+            assert (over["x"] >= 0 and over["y"] >= 0
+                    and over["x"] + over["width"] <= SMALL["width"]), f"badge at {over}: off"
+            assert over["y"] + over["height"] <= box["y"], f"badge at {over} over ABORT at {box}"
 
         in_view()
         panel_abort = pilot.get_by_role("button", name="ABORT: hold, then land")
@@ -838,7 +846,8 @@ def test_ctrl_c_stops_the_demo_and_its_simulator(demo: Demo) -> None:
 
 def test_the_overlay_abort_says_not_connected_once_the_page_is_gone(pilot) -> None:  # type: ignore[no-untyped-def]
     """The demo stopped: the page's websocket is down, viser drops what it would send, and
-    the overlay, above viser's "disconnected" layer, must not say "sent"."""
+    the overlay, above viser's "disconnected" layer, must not say "sent"; the badge says
+    STALE."""
     answers = abort_answers(pilot)[0]
     abort = pilot.locator("[data-gcs=abort]")
     abort.click()
@@ -846,3 +855,7 @@ def test_the_overlay_abort_says_not_connected_once_the_page_is_gone(pilot) -> No
     said = abort.inner_text()
     assert abort_answers(pilot)[1] == "offline" and said == ABORT_ANSWERS["offline"], (
         f"overlay: {abort_answers(pilot)}, {said!r}")
+    # and its badge says how long it has heard nothing, trying to reconnect
+    wait_for(lambda: "(reconnecting)" in freshness(pilot)["text"], 2 * RECONNECT_AFTER_S,
+             "the badge reconnecting", lambda: str(freshness(pilot)))
+    assert freshness(pilot)["state"] == "stale", freshness(pilot)

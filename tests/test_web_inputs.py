@@ -19,8 +19,12 @@ from web._browser_script import (
     ABORT_ANSWERS,
     ABORT_HOTKEY,
     ABORT_MODIFIER,
+    BEAT_PERIOD_S,
     CHANNEL_LABEL,
+    RECONNECT_AFTER_S,
+    RECONNECT_MAX_S,
     SEND_PERIOD_MS,
+    STALE_AFTER_S,
     abort_keys,
     pads_html,
     script_source,
@@ -99,9 +103,15 @@ def test_the_script_is_configured_from_the_python_tables() -> None:
     source = script_source()
     config = json.loads(re.search(r"const CFG = (\{.*?\});", source).group(1))  # type: ignore[union-attr]
     abort = config.pop("abort")
+    fresh = config.pop("fresh")
     assert config == {"channel": CHANNEL_LABEL, "keys": dict(HOTKEYS),
                       "steps": list(STEP_ACTIONS), "period": SEND_PERIOD_MS,
                       "linger": int(INPUT_TIMEOUT * 1000)}
+    # the freshness badge: stale, then reconnecting, after the server's own figures
+    assert (fresh["stale"], fresh["reconnect"], fresh["reconnectMax"]) == (
+        STALE_AFTER_S, RECONNECT_AFTER_S, RECONNECT_MAX_S)
+    assert BEAT_PERIOD_S < STALE_AFTER_S / 3 < RECONNECT_AFTER_S  # beats to spare
+    assert "st.beat = (t, age) =>" in source  # what beat() calls
     # the overlay presses the abort command's own hotkey: Ctrl+Shift+X, as registered
     assert (abort["key"], abort["ctrl"], abort["shift"], abort["alt"]) == (
         ABORT_HOTKEY, True, True, False)

@@ -5,8 +5,8 @@ Modules:
     ``_actions``         What a viewer can do to the flight, in the loop's time.
     ``_browser_input``   What a browser sends about its keyboard and virtual sticks, and how
                          it is read.
-    ``_browser_script``  The page's input script: hotkeys and virtual sticks that viser
-                         lacks.
+    ``_browser_script``  The page's script: hotkeys, virtual sticks and a freshness badge
+                         that viser lacks.
     ``_control_lock``    Who may steer the team: at most one viewer at a time.
     ``_frame``           What the scene shows in one frame, computed as plain arrays (NED,
                          SI).
@@ -31,6 +31,8 @@ Modules:
     ``_trails``          Short trails behind each vehicle: where the team has just been.
     ``_ui``              The live page of one GCS: a viser server and the thread that draws
                          it.
+    ``_viser_threads``   Feeding viser from our own threads: its senders are woken on its
+                         event loop only.
     ``palette``          Colours of the scene: what a colour means is decided here, once.
     ``wireviewer``       A viewer without a browser: a websocket client of a viser page that
                          decodes what it gets.

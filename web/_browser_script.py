@@ -1,4 +1,4 @@
-"""The page's input script: hotkeys and virtual sticks that viser lacks.
+"""The page's script: hotkeys, virtual sticks and a freshness badge that viser lacks.
 
 viser 1.1.1 offers command hotkeys (key-down only, letters/digits/a few
 specials: no ``+``/``-``, no key-up, so no "hold W to fly forward") and
@@ -43,13 +43,35 @@ move viser's camera as usual) and the pads do nothing.
 The script is shipped with viser's ``RunJavascriptMessage``, the mechanism
 ``GuiApi.add_plotly`` uses to load plotly.js; viser 1.1.1 has no public call
 for it, hence the one private import below (and the same message, sent to one
-viewer, carries :func:`answer_abort`). It is kept in the server's persistent
-messages, so viewers connecting later get it too.
+viewer, carries :func:`answer_abort` and :func:`beat`). It is kept in the server's
+persistent messages, so viewers connecting later get it too.
+
+The script shows **how old the page's data is**: a small badge above the abort, "data
+0.3 s old", that turns red, "STALE — no update for N s", once
+:data:`STALE_AFTER_S` passed without news from the GCS. The news is the server's
+*beat* (:func:`beat`, about four a second to every viewer, with each loop tick
+and at least every :data:`BEAT_PERIOD_S`): the GCS time of the latest tick and
+how old that tick was when the beat left. The page adds the time since the beat
+arrived (its own clock), so the badge measures what the operator sees, whether
+the GCS's loop stalled (the beats say their data is old) or the viewer's
+connection did (no beat comes). A beat is applied with the page's other
+messages, in its render loop, so a page that stopped applying what it receives
+reads as stale too. After :data:`RECONNECT_AFTER_S` without a beat the script
+forces a reconnect, then again with a doubling back-off (at most every
+:data:`RECONNECT_MAX_S`): viser's page keeps its websocket in a Worker and
+retries only once its socket closed, and only while the window has the focus,
+so a half-open socket (nothing arrives, nothing closes) or a window in the
+background would stay frozen. The script learns the Worker from its messages
+(it hooks ``MessageEvent``'s ``data`` getter: viser keeps no other handle) and
+posts it viser's own ``retry``, which opens a fresh socket (the server then
+replays the page, as for any reconnect); without the Worker it reloads the page,
+once the server answers at all.
 """
 
 from __future__ import annotations
 
 import json
+import math
 from importlib import resources
 from typing import Literal
 
@@ -64,10 +86,15 @@ __all__ = [
     "ABORT_HOTKEY",
     "ABORT_LABEL",
     "ABORT_MODIFIER",
+    "BEAT_PERIOD_S",
     "CHANNEL_LABEL",
+    "RECONNECT_AFTER_S",
+    "RECONNECT_MAX_S",
     "SEND_PERIOD_MS",
+    "STALE_AFTER_S",
     "abort_keys",
     "answer_abort",
+    "beat",
     "install_script",
     "pads_html",
     "script_source",
@@ -96,6 +123,19 @@ ABORT_ANSWERS = {"sent": "ABORT sent", "refused": "ABORT refused", "offline": "N
 
 ABORT_ANSWER_WAIT_MS = 2000
 """How long the button waits for the server's answer before it says "NOT CONNECTED"."""
+
+STALE_AFTER_S = 1.0
+"""The badge turns red, "STALE", once the page's data is older than this, s."""
+
+BEAT_PERIOD_S = 0.25
+"""The server beats to every viewer with each loop tick (4 Hz) and at least this often, s."""
+
+RECONNECT_AFTER_S = 3.0
+"""Without a beat for this long the page forces a reconnect, s (then with a doubling
+back-off, at most every :data:`RECONNECT_MAX_S`)."""
+
+RECONNECT_MAX_S = 15.0
+"""The longest wait between two forced reconnects, s."""
 
 _SCRIPT_FILE = "browser_input.js"
 """The script itself, shipped beside this module as package data."""
@@ -138,6 +178,14 @@ _ABORT_STYLE = (
     "box-shadow:0 2px 10px rgba(0,0,0,0.45);cursor:pointer;touch-action:manipulation;")
 
 
+_BADGE_STYLE = (
+    "position:fixed;left:50%;bottom:72px;transform:translateX(-50%);z-index:2147483000;"
+    "pointer-events:none;white-space:nowrap;padding:2px 10px;border-radius:10px;"
+    "font:12px/1.4 sans-serif;box-shadow:0 1px 4px rgba(0,0,0,0.3);")
+"""Centred above the abort (whose top is about 60 px up), over everything like it, never
+taking a click; the script sets its colours."""
+
+
 def abort_keys() -> str:
     """The abort's keys as a person reads them, e.g. ``Ctrl+Shift+X``."""
     names = {"cmd/ctrl": "Ctrl", "shift": "Shift", "alt": "Alt"}
@@ -161,6 +209,10 @@ def script_source() -> str:
                   "title": "Abort: the team stops, holds, then lands. Any viewer may; "
                            f"{abort_keys()} does the same.",
                   "style": _ABORT_STYLE},
+        "fresh": {"stale": STALE_AFTER_S, "reconnect": RECONNECT_AFTER_S,
+                  "reconnectMax": RECONNECT_MAX_S, "every": 100, "style": _BADGE_STYLE,
+                  "ok": "background:rgba(255,255,255,0.85);color:#37474f;font-weight:400",
+                  "bad": "background:#c92a2a;color:#fff;font-weight:700"},
     }
     source = resources.files("web").joinpath(_SCRIPT_FILE).read_text(encoding="utf-8")
     return source.replace("__CONFIG__", json.dumps(config))
@@ -173,6 +225,15 @@ def answer_abort(client: viser.ClientHandle, *, accepted: bool) -> None:
     client._websock_connection.queue_message(  # no public API in viser 1.1.1
         viser_messages.RunJavascriptMessage(
             source=f"window.__gcsInput && window.__gcsInput.abortAnswer({outcome});"))
+
+
+def beat(client: viser.ClientHandle, *, gcs_time: float | None, age: float) -> None:
+    """Tell ``client``'s page the GCS is there: the GCS time of the data the page shows
+    (None before the first tick) and how old that data is now, s."""
+    t = "null" if gcs_time is None or not math.isfinite(gcs_time) else f"{gcs_time:.3f}"
+    client._websock_connection.queue_message(  # no public API in viser 1.1.1
+        viser_messages.RunJavascriptMessage(
+            source=f"window.__gcsInput && window.__gcsInput.beat({t}, {max(0.0, age):.3f});"))
 
 
 def install_script(server: viser.ViserServer) -> None:

@@ -30,6 +30,7 @@ from web._status import vehicle_table_html
 from web._timeline import SPEEDS, Timeline
 from web._trails import Trails
 from web._ui import page_url
+from web._viser_threads import wake_on_loop
 
 __all__ = ["ReplayUi", "replay_summary_html", "run_replay"]
 
@@ -121,6 +122,7 @@ class ReplayUi:
         self.server = viser.ViserServer(host=host, port=port, label=f"GCS replay {name}",
                                         verbose=False)
         server = self.server
+        wake_on_loop(server)  # drawn from this page's thread and viser's callbacks
         server.gui.configure_theme(control_width="large", show_share_button=False)
         server.gui.main_panel.dock_right()
         self._scene = SceneView(server.scene, self.view, quad_mesh(*BEBOP_ARM),

@@ -4,7 +4,12 @@ The 4 Hz loop is never made to wait for the page: its listener only stores
 the latest snapshot. A separate UI thread draws the scene at ``rate_hz``
 (25 Hz by default) from the vehicles' latest telemetry and the simulator's
 truth, each frame inside ``server.atomic()``; the status and plots follow the
-loop's snapshots. The holder's sticks are written to the operator command
+loop's snapshots, and every viewer gets a *beat* with each of them (and at
+least every 0.25 s): the GCS time of the latest tick and its age, from which
+the page's badge says how old its data is (``web._browser_script``). Every
+buffer of the server wakes its sender on viser's loop only
+(``web._viser_threads``): this thread and viser's callbacks write from other
+threads. The holder's sticks are written to the operator command
 from this thread too (refreshed while deflected, one zero on release), so the
 browser is one more input source beside the gamepad and scripts.
 
@@ -22,6 +27,7 @@ from __future__ import annotations
 
 import collections
 import logging
+import math
 import socket
 import threading
 import time
@@ -33,7 +39,14 @@ from gcs.app import GcsApp
 from gcs.common import join_thread
 from gcs.loop import Action, RuntimeSnapshot
 from web._actions import OperatorActions
-from web._browser_script import ABORT_HOTKEY, ABORT_LABEL, ABORT_MODIFIER, install_script
+from web._browser_script import (
+    ABORT_HOTKEY,
+    ABORT_LABEL,
+    ABORT_MODIFIER,
+    BEAT_PERIOD_S,
+    beat,
+    install_script,
+)
 from web._control_lock import ControlLock
 from web._frame import TeamView, build_frame
 from web._history import History
@@ -43,6 +56,7 @@ from web._quadmesh import quad_mesh
 from web._scene import SceneView
 from web._status import UiStats, events_html, summary_html, vehicles_html
 from web._trails import Trails
+from web._viser_threads import wake_on_loop
 
 __all__ = ["UI_RATE_HZ", "WebUi", "page_url"]
 
@@ -79,6 +93,7 @@ class WebUi:
         self.server = viser.ViserServer(host=host, port=port, label=f"GCS {cfg.name}",
                                         verbose=False)
         server = self.server
+        wake_on_loop(server)
         server.gui.configure_theme(control_width="large", show_share_button=False)
         server.gui.main_panel.dock_right()
         abort = server.gui.add_command(ABORT_LABEL, hotkey=ABORT_HOTKEY, modifier=ABORT_MODIFIER,
@@ -88,7 +103,8 @@ class WebUi:
         install_script(server)
         self._scene = SceneView(server.scene, self._view,
                                 quad_mesh(cfg.airframe.arm_x, cfg.airframe.arm_y),
-                                geofence_xy=cfg.safety.geofence_xy)
+                                geofence_xy=cfg.safety.geofence_xy,
+                                geofence_margin=cfg.safety.geofence_margin)
         # behind the team (south, its forward is north) and above: forward is away
         server.initial_camera.position = (-3.4, -1.0, -2.4)
         server.initial_camera.look_at = (0.0, 0.0, 0.0)
@@ -111,7 +127,9 @@ class WebUi:
         self._actions = OperatorActions(runtime, app.operator, app.clock)
         self._panels: dict[int, ControlPanel] = {}
         self._panels_lock = threading.Lock()
-        self._snapshot: RuntimeSnapshot | None = None
+        # the loop's latest snapshot and when it came (monotonic; before the first: now)
+        self._latest: tuple[RuntimeSnapshot | None, float] = (None, time.monotonic())
+        self._beat_at = -math.inf
         self._shown: RuntimeSnapshot | None = None
         self._sticks_active = False
         self._last_error = ""
@@ -194,7 +212,7 @@ class WebUi:
 
     def _on_tick(self, snap: RuntimeSnapshot, _truth: object) -> None:
         """The loop's listener: store, nothing else (the loop must never wait for the page)."""
-        self._snapshot = snap
+        self._latest = (snap, time.monotonic())
 
     def _run(self) -> None:
         due = time.monotonic()
@@ -214,7 +232,7 @@ class WebUi:
         app = self._app
         started = time.perf_counter()
         fleet = app.loop.fleet_table.read(app.clock.now())
-        snap = self._snapshot
+        snap, came = self._latest
         self._trails.add(fleet.t, fleet.p_ned)
         frame = build_frame(self._view, fleet, scale=snap.operator.demand.scale if snap else 1.0,
                             truth=app.truth, trails=self._trails,
@@ -226,9 +244,23 @@ class WebUi:
         self._write_sticks(panels)
         for panel in panels:
             panel.follow_camera(frame.centroid)
+        ticked = snap is not None and snap is not self._shown
         if snap is not None and snap is not self._shown:
             self._shown = snap
             self._show_tick(snap, panels)
+        self._beat(panels, snap, came, ticked=ticked)
+
+    def _beat(self, panels: list[ControlPanel], snap: RuntimeSnapshot | None, came: float, *,
+              ticked: bool) -> None:
+        """Tell every viewer the GCS time of the latest tick and its age (with each tick,
+        and at least every :data:`BEAT_PERIOD_S`): the page's freshness badge."""
+        now = time.monotonic()
+        if not ticked and now - self._beat_at < BEAT_PERIOD_S:
+            return
+        self._beat_at = now
+        gcs_time = snap.fleet.t if snap is not None else None
+        for panel in panels:
+            beat(panel.client, gcs_time=gcs_time, age=now - came)
 
     def _write_sticks(self, panels: list[ControlPanel]) -> None:
         holder = self._lock.holder

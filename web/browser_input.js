@@ -1,4 +1,5 @@
-// The page's input script: hotkeys, virtual sticks and the always-visible abort.
+// The page's script: hotkeys, virtual sticks, the always-visible abort and the
+// badge saying how old the page's data is.
 // Shipped as package data and run in every viewer by web/_browser_script.py, which
 // fills in the configuration placeholder (keys, actions, timing, the abort) as JSON.
 (() => {
@@ -184,4 +185,77 @@
     sendAbort();
   });
   document.body.appendChild(abort);
+
+  // how old the page's data is: the server's beat (web._browser_script.beat) brings the
+  // GCS time of its latest tick and that tick's age when the beat left; the page adds the
+  // time since the beat was applied (by viser's message queue, in the render loop)
+  const fresh = {at: performance.now(), age: 0, t: null, beats: 0, stale: null,
+                 forcedAt: -Infinity, backoff: CFG.fresh.reconnect, reconnects: 0,
+                 worker: null, asking: false, due: null};
+  st.fresh = fresh;
+  const badge = document.createElement("div");
+  badge.dataset.gcs = "freshness";
+  badge.setAttribute("role", "status");
+  document.body.appendChild(badge);
+  st.beat = (t, age) => {
+    fresh.at = performance.now();
+    fresh.age = age;
+    fresh.t = t;
+    fresh.beats += 1;
+    fresh.backoff = CFG.fresh.reconnect;
+    badge.dataset.gcsTime = t === null ? "" : String(t);
+    freshness();
+    clearTimeout(fresh.due);  // turns stale on time, between the display's ticks
+    fresh.due = setTimeout(freshness, Math.max(0, 1000 * (CFG.fresh.stale - age)) + 1);
+  };
+  // viser's page keeps its websocket in a Worker and holds the only handle; the Worker's
+  // messages pass through MessageEvent's data getter, where the script meets it
+  const getData = Object.getOwnPropertyDescriptor(MessageEvent.prototype, "data");
+  if (getData && getData.get && getData.configurable && typeof Worker !== "undefined") {
+    Object.defineProperty(MessageEvent.prototype, "data", {
+      configurable: true, enumerable: getData.enumerable,
+      get() {
+        const data = getData.get.call(this);
+        if (data && this.target instanceof Worker &&
+            /^(message_batch|connected|closed)$/.test(data.type)) fresh.worker = this.target;
+        return data;
+      }});
+  }
+  // no beat for a while: the socket may be half-open (nothing arrives, nothing closes),
+  // or closed in a window without the focus (viser then does not retry): reconnect
+  function reconnect() {
+    fresh.reconnects += 1;
+    badge.dataset.gcsReconnects = String(fresh.reconnects);
+    if (fresh.worker) {  // viser's own retry: a fresh socket; the server replays the page
+      fresh.worker.postMessage({type: "retry"});
+      return;
+    }
+    if (fresh.asking) return;
+    fresh.asking = true;  // no Worker known: reload, but only a page the server serves
+    fetch("/__gcs_alive", {cache: "no-store"}).then(() => location.reload(), () => {})
+      .finally(() => { fresh.asking = false; });
+  }
+  const secs = (x) => (x < 10 ? x.toFixed(1) : String(Math.round(x)));
+  function freshness() {
+    const now = performance.now();
+    const silent = (now - fresh.at) / 1000;
+    const age = silent + fresh.age;
+    const stale = age > CFG.fresh.stale;
+    if (stale !== fresh.stale) {
+      fresh.stale = stale;
+      badge.dataset.gcsState = stale ? "stale" : "fresh";
+      badge.dataset[stale ? "gcsStaleAt" : "gcsFreshAt"] = String(Date.now());
+      badge.style.cssText = CFG.fresh.style + (stale ? CFG.fresh.bad : CFG.fresh.ok);
+    }
+    if (silent > CFG.fresh.reconnect && now - fresh.forcedAt > 1000 * fresh.backoff) {
+      fresh.forcedAt = now;
+      fresh.backoff = Math.min(2 * fresh.backoff, CFG.fresh.reconnectMax);
+      reconnect();
+    }
+    badge.textContent = !stale ? "data " + age.toFixed(1) + " s old"
+      : "STALE — no update for " + secs(age) + " s" +
+        (silent > CFG.fresh.reconnect ? " (reconnecting)" : "");
+  }
+  freshness();
+  setInterval(freshness, CFG.fresh.every);
 })();
