@@ -110,7 +110,7 @@ class TickStats:
     compute_p99: float
     jitter_p99: float
     overruns: int
-    stall_max: float = 0.0  # the latest tick so far, s late
+    stall_max: float = 0.0  # how late the latest tick so far came, s
     setpoint_gap_max: float = 0.0  # longest time between two setpoint rounds (loop's clock), s
 
 
@@ -620,7 +620,8 @@ class Runtime:
                 self.ids, modes, self._streaming_modes, coming_down, strict=True)
                 if mode != want and not down)
         fresh = bool(np.all(fleet.age <= self.team.config.safety.stale_after))
-        if not fresh or self._gap_seen or now - self._last_send_clock > _GAP_S:
+        streaming = math.isfinite(self._last_send_clock)
+        if not fresh or self._gap_seen or (streaming and now - self._last_send_clock > _GAP_S):
             self._gap_seen = False
             self.recovery.note_gap(now)
         healthy = fresh and fleet.located and not verdict.hold and not verdict.land
