@@ -173,7 +173,7 @@ def test_positions_that_disagree_with_the_shape_hold_the_team_instead_of_tearing
         assert snap.safety.hold and not snap.moving and snap.phase is Phase.FORMATION
         assert max(worst) < 0.3, max(worst)
         # each vehicle pulled back to its own point, with no term of another's position
-        held = app.runtime._hold_points
+        held = app.runtime.deformation.hold_points
         assert held is not None
         want = -HOLD_KV * snap.fleet.v_ned[:, :2] - HOLD_KP * (snap.fleet.p_ned[:, :2] - held)
         np.testing.assert_allclose(snap.accel_cmd, want, atol=1e-9)

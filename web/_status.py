@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gcs.link import LinkHealth
-from gcs.loop import FleetState, RuntimeSnapshot, TickStats
+from gcs.loop import Deformation, FleetState, RuntimeSnapshot, TickStats
 from gcs.wire import SimTruth
 from web._frame import rope_pull_estimate, vehicle_states
 from web.palette import VehicleState, state_colors, tension_colors
@@ -131,7 +131,10 @@ def banners_html(snap: RuntimeSnapshot) -> str:
         colour = "#e67e22" if "re-engaging" in snap.recovery or "waiting" in snap.recovery \
             else "#c0392b"
         out.append((colour, "recovery", snap.recovery))
-    if snap.safety.hold:
+    if snap.shape is Deformation.REFORM:
+        out.append(("#e67e22", "hold", "RE-FORMING: the team is deformed beyond the "
+                    "analysis' safe bound; shape keeping with the motion frozen"))
+    elif snap.safety.hold:
         out.append(("#c0392b", "hold", "HOLDING: the team is deformed beyond the analysis' "
                     "safe bound; each vehicle holds its point (land if it grows)"))
     if snap.fence is not None and snap.fence.text:

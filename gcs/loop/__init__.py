@@ -8,6 +8,7 @@ setpoint per vehicle, the phase actions; it records through a
 Modules:
 
     ``_clock``     Clocks: where every loop takes its time from.
+    ``_deformation``  A team deformed beyond the safe bound: hold, re-form, or land.
     ``_fleet``     The team's latest state as arrays, read from the links once per tick.
     ``_geofence``  The geofence: the team slows to a stop at it and can fly back.
     ``_gamepad``   A gamepad on the GCS side: sticks, altitude, scale, guidance switch,
@@ -24,6 +25,7 @@ Modules:
 """
 
 from gcs.loop._clock import Clock, ClockStoppedError, ExternalClock, WallClock
+from gcs.loop._deformation import Deformation
 from gcs.loop._fleet import FleetState, FleetTable
 from gcs.loop._gamepad import Gamepad, load_gamepad_config
 from gcs.loop._geofence import FenceVerdict
@@ -38,6 +40,7 @@ __all__ = [
     "Action",
     "Clock",
     "ClockStoppedError",
+    "Deformation",
     "ExternalClock",
     "FenceVerdict",
     "FleetState",

@@ -7,6 +7,7 @@ result, as ROS ``use_sim_time`` or PX4 lockstep do.
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from typing import Protocol
@@ -56,6 +57,9 @@ class ExternalClock:
         self._closed = False
 
     def advance(self, t: float) -> None:
+        """Move to sim time ``t`` if it is later (never back); ValueError if not finite."""
+        if not math.isfinite(t):
+            raise ValueError(f"clock time must be finite, got {t}")
         with self._cond:
             if t > self._t:
                 self._t = t

@@ -48,6 +48,7 @@ from gcs.formation import fit_rotation
 from gcs.guidance import Guidance, MotionDemand, finite_max_norm, saturate
 from gcs.link import AutopilotProfile, Fanout, LinkError
 from gcs.loop._clock import Clock, ClockStoppedError
+from gcs.loop._deformation import Deformation, DeformationPolicy
 from gcs.loop._fleet import FleetState, FleetTable
 from gcs.loop._geofence import FenceVerdict, fence_demand
 from gcs.loop._operator import OperatorCommand, OperatorSnapshot
@@ -132,6 +133,7 @@ class RuntimeSnapshot:
     moving: bool = False  # the operator's motion was flown this tick (not frozen or held)
     fence: FenceVerdict | None = None  # what the geofence did (None: not applied)
     recovery: str = ""  # vehicles waiting to be re-engaged, and when (empty: none)
+    shape: Deformation = Deformation.NONE  # what a team deformed beyond the bound does
 
 
 _GAP_S = 0.3
@@ -217,8 +219,9 @@ class Runtime:
         """Re-engages vehicles that dropped to hold on a setpoint gap."""
         for profile in self._profile_list:  # a vehicle saying its setpoints stopped
             profile.link.add_record_listener(self._on_record)
-        self._hold_from: float | None = None  # deformation when the team began to hold, m
-        self._hold_points: np.ndarray | None = None  # (n, 2) where each vehicle holds, m
+        self.deformation = DeformationPolicy(growth=safety.deformed_land_growth)
+        """Hold, re-form or land a team deformed beyond the safe bound."""
+        self._shape = Deformation.NONE
         self._fence_text = ""
         self._handing_over = False  # taking off: the vehicles are switching to offboard
         self.resends = 0
@@ -485,7 +488,7 @@ class Runtime:
                                expected=self._streaming_modes if modes else (),
                                coming_down=coming_down)
             self._recover(now, fleet, verdict, modes, coming_down)
-            self._watch_deformation(verdict, phase)
+            self._shape = self._watch_deformation(now, fleet, verdict, phase)
         self._report_safety(verdict)
         op = self.operator.snapshot(now)
         phase = self.phase  # an action may have moved it meanwhile
@@ -506,7 +509,8 @@ class Runtime:
             if not verdict.freeze and fleet.located:
                 fence = self._fence(fleet, demand)
                 demand = fence.demand
-            accel, self._accel_last = self._stream(fleet, demand, op, hold=verdict.hold)
+            accel, self._accel_last = self._stream(
+                fleet, demand, op, hold=self._shape in (Deformation.HOLD, Deformation.LAND))
             self._streamed, self._streamed_at = accel, now
             self._advance(phase, op, now, fleet)
         else:
@@ -533,7 +537,7 @@ class Runtime:
                                compute_time=self._compute[-1], compute_cpu=cpu,
                                events=self.events()[-20:],
                                truth=truth, moving=moving, fence=fence,
-                               recovery=self.recovery.status(now))
+                               recovery=self.recovery.status(now), shape=self._shape)
         self._snapshot = snap
         # Lockstep: the phase actions and a scenario act now, while the sim stands still
         # at this tick's time; their effects show in the next tick.
@@ -561,7 +565,7 @@ class Runtime:
         """Guidance and one setpoint per vehicle (errors are per vehicle): the accelerations
         sent and the largest one's norm. ``hold``: each vehicle holds where it was."""
         if hold:
-            accel = self._damping(fleet, self._hold_points)
+            accel = self._damping(fleet, self.deformation.hold_points)
             largest = finite_max_norm(accel)
         elif fleet.located:
             accel = self.guidance.accelerations(fleet.p_ned[:, :2], fleet.v_ned[:, :2],
@@ -640,22 +644,28 @@ class Runtime:
         if isinstance(record, StatusText) and record.setpoints_lost:
             self.recovery.note_gap(self.clock.now())
 
-    def _watch_deformation(self, verdict: SafetyVerdict, phase: Phase) -> None:
-        """Land a held team whose deformation keeps growing."""
-        if not verdict.hold:
-            self._hold_from = self._hold_points = None
-            return
-        if self._hold_from is None:
-            self._hold_from = verdict.deformation
-            fleet = self.fleet_table.read(self.clock.now())
-            self._hold_points = fleet.p_ned[:, :2].copy()
-            return
-        growth = self.team.config.safety.deformed_land_growth
-        if verdict.deformation > self._hold_from + growth and phase.airborne \
+    def _watch_deformation(self, now: float, fleet: FleetState, verdict: SafetyVerdict,
+                           phase: Phase) -> Deformation:
+        """Hold, re-form or land a team deformed beyond the safe bound
+        (:mod:`gcs.loop._deformation`)."""
+        policy = self.deformation
+        p = fleet.p_ned[:, :2]
+        fresh = bool(np.all(fleet.age <= self.team.config.safety.stale_after))
+        if policy.observe(p, fleet.v_ned[:, :2], fleet.t - fleet.age,
+                          in_shape=fresh and fleet.located and not verdict.hold):
+            self._warn_once(("jump", 0), "a vehicle's position jumped: a deformation from "
+                                         "here on is held, not re-formed")
+        before = self._shape
+        shape = policy.update(now, deformed=verdict.hold, deformation=verdict.deformation, p_xy=p)
+        if shape is Deformation.LAND and phase.airborne \
                 and phase not in (Phase.ABORTING, Phase.LANDING):
-            self._event("error", f"deformation grew from {self._hold_from:.2f} to "
-                                 f"{verdict.deformation:.2f} m while holding: landing the team")
+            self._event("error", f"deformation grew from {policy.held_at:.2f} to "
+                                 f"{verdict.deformation:.2f} m: landing the team")
             self.request(Action.ABORT)
+        elif shape is Deformation.REFORM and before is not Deformation.REFORM:
+            self._event("warning", "re-forming the shape (motion frozen): the team was in "
+                                   "shape and no position jumped, so the positions are trusted")
+        return shape
 
     def _send_all(self, accel: np.ndarray, *, z_ned: float) -> None:
         """One setpoint per vehicle, packed for the whole fleet at once; an error is reported
