@@ -211,6 +211,11 @@ class Link:
             return self._store.snapshot()
 
     @property
+    def rtt_s(self) -> float | None:
+        """Latest round-trip time (TIMESYNC or COMMAND_ACK), s; None before the first."""
+        return self._rtt_s
+
+    @property
     def health(self) -> LinkHealth:
         """Snapshot of the link's health (a new one on every read)."""
         with self._rx_lock:

@@ -58,12 +58,16 @@ from gcs.loop._safety import SafetyVerdict, evaluate
 from gcs.loop._stepgate import HOLD_CAP_S, StepGate
 from gcs.wire import SETPOINT_MESSAGE, SetpointPacker, SimTruth, StatusText, TelemetryRecord
 
-__all__ = ["HELD_SETPOINT_S", "HOLD_KP", "HOLD_KV", "Event", "FlightRecorder", "Runtime",
-           "RuntimeSnapshot", "TickStats"]
+__all__ = ["HELD_SETPOINT_S", "HOLD_KP", "HOLD_KV", "LINK_DELAY_CAP_S", "Event",
+           "FlightRecorder", "Runtime", "RuntimeSnapshot", "TickStats"]
 
 HOLD_KP, HOLD_KV = 0.25, 1.0
 """Gains of a held team's pull back to each vehicle's own point, 1/s^2 and 1/s (critically
 damped, slow beside the 4 Hz tick)."""
+
+LINK_DELAY_CAP_S = 0.25
+"""Largest round trip the guidance's prediction horizon follows, s: beyond it no lead saves
+the paper's gains at 4 Hz (tests/test_link_delay.py)."""
 
 HELD_SETPOINT_S = 1.0
 """Longest a tick's acceleration setpoint is re-sent, s of the loop's clock; past it, a late
@@ -222,6 +226,8 @@ class Runtime:
         self.deformation = DeformationPolicy(growth=safety.deformed_land_growth)
         """Hold, re-form or land a team deformed beyond the safe bound."""
         self._shape = Deformation.NONE
+        self._rtts: collections.deque[float] = collections.deque(maxlen=40)
+        self._base_lead = self.guidance.lead
         self._fence_text = ""
         self._handing_over = False  # taking off: the vehicles are switching to offboard
         self.resends = 0
@@ -236,6 +242,10 @@ class Runtime:
         """Error events so far (the event list keeps only the recent ones)."""
         self.gate = gate if gate is not None else StepGate(enabled=False)
         """Lets phase actions act only at ticks in lockstep (disabled otherwise)."""
+        self.follow_link_delay = not self.gate.enabled and self._base_lead > 0.0
+        """Lengthen the guidance's prediction by the links' round trip (not in lockstep,
+        where the simulator waits for the setpoints: no delay, and a wall-time figure
+        would make runs differ)."""
         # An action and its step per vehicle, twice: the loop may start a landing while an
         # action is stuck. Fewer and a vehicle's step would queue behind the others (in
         # lockstep, holding every tick's window until the gate's cap).
@@ -506,6 +516,8 @@ class Runtime:
         self._streamed = None
         fence = None
         if self._streams(phase):
+            if self.follow_link_delay:
+                self._follow_link_delay()
             if not verdict.freeze and fleet.located:
                 fence = self._fence(fleet, demand)
                 demand = fence.demand
@@ -575,6 +587,20 @@ class Runtime:
             accel, largest = np.zeros((fleet.n, 2)), 0.0
         self._send_all(accel, z_ned=-self._altitude(op))
         return accel, largest
+
+    def _follow_link_delay(self) -> None:
+        """The guidance predicts the distance errors half a period ahead, the hold's delay;
+        over a radio the positions are a downlink old and the setpoints act an uplink
+        late, so the prediction goes one round trip further (median of the last ten
+        seconds of the slowest link's TIMESYNC). At 4 Hz with the paper's gains a 0.1 s
+        link each way made the shape's stiffest mode oscillate (about 0.3 m, 6 s period,
+        in the simulator behind a 100 ms relay); predicted further, it settles."""
+        rtts = [r for r in (p.link.rtt_s for p in self._profile_list) if r is not None]
+        if rtts:
+            self._rtts.append(max(rtts))
+        if self._rtts:
+            delay = min(float(np.median(self._rtts)), LINK_DELAY_CAP_S)
+            self.guidance.lead = self._base_lead + delay
 
     def _altitude(self, op: OperatorSnapshot) -> float:
         """The altitude setpoint: the operator's, never above the geofence's ceiling."""
