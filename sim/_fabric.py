@@ -18,25 +18,35 @@ key                                                dir    payload
 
 Receivers run on zenoh's threads: vehicle frames go to the host's
 ``on_frame`` callback, everything else is pushed into its
-:class:`~sim._inbox.Inbox`.
+:class:`~sim._inbox.Inbox`. Anyone on the fabric can publish on the inbound
+keys: a payload longer than its key allows (MAVLink
+:data:`gcs.transport.MAVLINK_PAYLOAD_MAX`, control
+:data:`sim._faults.CONTROL_MAX_BYTES`, ack :data:`gcs.wire.CLOCK_MAX_BYTES`)
+is dropped before it is copied out of zenoh, and counted with every other
+refused input in the host's :class:`~sim._inbox.Refusals`.
 """
 
 from __future__ import annotations
 
 import contextlib
-import logging
 import threading
 from collections.abc import Callable, Sequence
 
 import zenoh
 
-from gcs.transport import ZenohSettings, ZenohTransport, declare_alive, open_session
-from gcs.wire import SimTruth, decode_time, encode_clock, keys
-from sim._inbox import ClockAck, ControlMessage, Inbox
+from gcs.transport import (
+    MAVLINK_PAYLOAD_MAX,
+    ZenohSettings,
+    ZenohTransport,
+    bounded_payload,
+    declare_alive,
+    open_session,
+)
+from gcs.wire import CLOCK_MAX_BYTES, SimTruth, decode_time, encode_clock, keys
+from sim._faults import CONTROL_MAX_BYTES
+from sim._inbox import ClockAck, ControlMessage, Inbox, Refusals
 
 __all__ = ["CONTROL_TOPIC", "TRUTH_TOPIC", "HostFabric"]
-
-_log = logging.getLogger(__name__)
 
 TRUTH_TOPIC = "truth"
 """Sim topic of the ground truth samples."""
@@ -49,7 +59,7 @@ class _VehicleLink:
     """One vehicle's zenoh transport and liveliness token."""
 
     def __init__(self, session: zenoh.Session, fleet: str, sysid: int, index: int,
-                 on_frame: Callable[[int, bytes], None]) -> None:
+                 on_frame: Callable[[int, bytes], None], refusals: Refusals) -> None:
         # Frames block rather than drop: on loopback a full queue means a busy CPU, not a
         # radio, and lost telemetry would make lockstep runs differ. A peer that goes away
         # closes its link, so nothing waits on it for long.
@@ -57,7 +67,10 @@ class _VehicleLink:
             session, tx_key=keys.mavlink(fleet, sysid, keys.Direction.FROM_VEHICLE),
             rx_key=keys.mavlink(fleet, sysid, keys.Direction.TO_VEHICLE),
             description=f"zenoh vehicle end fleet/{fleet}/vehicle/{sysid}",
-            congestion=zenoh.CongestionControl.BLOCK)
+            congestion=zenoh.CongestionControl.BLOCK,
+            on_oversize=lambda n: refusals.refuse(
+                f"MAVLink payload for vehicle {sysid}",
+                f"{n} bytes, more than {MAVLINK_PAYLOAD_MAX}"))
         self.transport.start(lambda data: on_frame(index, data))
         self.token: zenoh.LivelinessToken | None = declare_alive(session, fleet=fleet,
                                                                  sysid=sysid)
@@ -76,8 +89,9 @@ class HostFabric:
 
     def __init__(self, settings: ZenohSettings, *, fleet: str, sysids: Sequence[int],
                  inbox: Inbox, on_frame: Callable[[int, bytes], None],
-                 announce_sent: bool = False) -> None:
-        """``on_frame(index, payload)`` runs on zenoh's threads for each vehicle's payload.
+                 announce_sent: bool = False, refusals: Refusals | None = None) -> None:
+        """``on_frame(index, payload)`` runs on zenoh's threads for each vehicle's payload;
+        ``refusals`` counts what is refused on the way.
 
         ``announce_sent`` (lockstep): every clock sample carries how many truth
         samples and how many payloads of each vehicle were published
@@ -90,6 +104,8 @@ class HostFabric:
         self._truth_sent = 0
         self._sent_lock = threading.Lock()  # receive threads send echoes, the loop telemetry
         self._settings = settings
+        self.refusals = refusals if refusals is not None else Refusals()
+        """Inputs refused (oversize payloads, malformed acks), by kind."""
         self._session = open_session(settings)
         self._links: dict[int, _VehicleLink] = {}
         self._subscribers: list[zenoh.Subscriber] = []
@@ -108,10 +124,10 @@ class HostFabric:
             self._subscribers.append(self._session.declare_subscriber(
                 keys.clock_ack(fleet), lambda s: self._on_ack(s, inbox)))
             self._subscribers.append(self._session.declare_subscriber(
-                keys.sim(fleet, CONTROL_TOPIC),
-                lambda s: inbox.put(ControlMessage(s.payload.to_bytes()))))
+                keys.sim(fleet, CONTROL_TOPIC), lambda s: self._on_control(s, inbox)))
             for index, sysid in enumerate(sysids):
-                self._links[index] = _VehicleLink(self._session, fleet, sysid, index, on_frame)
+                self._links[index] = _VehicleLink(self._session, fleet, sysid, index, on_frame,
+                                                  self.refusals)
         except BaseException:
             self.close()
             raise
@@ -136,6 +152,11 @@ class HostFabric:
                     self._sent[index] += 1
             else:
                 link.transport.send(frame)
+
+    def oversize(self, index: int) -> int:
+        """Payloads for vehicle ``index`` dropped for being too long (0 once it is gone)."""
+        link = self._links.get(index)
+        return 0 if link is None else link.transport.oversize
 
     def drop_vehicle(self, index: int) -> None:
         """Vehicle ``index`` is gone: close its link and undeclare its token."""
@@ -172,9 +193,21 @@ class HostFabric:
             with contextlib.suppress(zenoh.ZError):
                 self._session.close()
 
-    @staticmethod
-    def _on_ack(sample: zenoh.Sample, inbox: Inbox) -> None:
+    def _on_ack(self, sample: zenoh.Sample, inbox: Inbox) -> None:
+        data = bounded_payload(sample, CLOCK_MAX_BYTES)
+        if data is None:
+            self.refusals.refuse("clock ack", f"{len(sample.payload)} bytes, more than "
+                                              f"{CLOCK_MAX_BYTES}")
+            return
         try:
-            inbox.put(ClockAck(decode_time(sample.payload.to_bytes())))
+            inbox.put(ClockAck(decode_time(data)))
         except ValueError as exc:
-            _log.warning("ignored clock ack: %s", exc)
+            self.refusals.refuse("clock ack", str(exc))
+
+    def _on_control(self, sample: zenoh.Sample, inbox: Inbox) -> None:
+        data = bounded_payload(sample, CONTROL_MAX_BYTES)
+        if data is None:  # parsed by the loop, which refuses the rest (sim._faults)
+            self.refusals.refuse("control message", f"{len(sample.payload)} bytes, more than "
+                                                    f"{CONTROL_MAX_BYTES}")
+            return
+        inbox.put(ControlMessage(data))

@@ -12,15 +12,25 @@ testable against the real sim process. Messages are JSON objects on
                                          -> HOLD -> LAND); the token stays (the
                                          process is up, only the radio is gone)
     {"action": "restore", "sysid": 3}   ends a cut (a kill is final)
+
+Anyone on the zenoh fabric can publish here, so a payload is refused
+(:class:`ValueError`) before it is parsed if it is longer than
+:data:`CONTROL_MAX_BYTES`, and whatever the JSON parser raises on hostile
+input (a nesting deep enough to exhaust the recursion limit raised
+RecursionError, which killed the sim's loop) becomes a ValueError too.
 """
 
 from __future__ import annotations
 
 import json
+import reprlib
 from dataclasses import dataclass
 from enum import Enum
 
-__all__ = ["ControlAction", "ControlCommand", "parse_control"]
+__all__ = ["CONTROL_MAX_BYTES", "ControlAction", "ControlCommand", "parse_control"]
+
+CONTROL_MAX_BYTES = 1024
+"""Longest control payload taken, bytes (a real one is about 35)."""
 
 
 class ControlAction(Enum):
@@ -49,7 +59,19 @@ class ControlCommand:
 
 
 def parse_control(data: bytes) -> ControlCommand:
-    """Decode a control payload; ValueError naming the fault otherwise."""
+    """Decode a control payload; ValueError naming the fault, and nothing else, otherwise."""
+    if len(data) > CONTROL_MAX_BYTES:
+        raise ValueError(f"control message of {len(data)} bytes, more than "
+                         f"{CONTROL_MAX_BYTES}")
+    try:
+        return _parse(data)
+    except ValueError:
+        raise
+    except Exception as exc:  # RecursionError on deep nesting, and whatever else may come
+        raise ValueError(f"control message is malformed: {type(exc).__name__}") from None
+
+
+def _parse(data: bytes) -> ControlCommand:
     try:
         doc = json.loads(data)
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
@@ -60,9 +82,9 @@ def parse_control(data: bytes) -> ControlCommand:
         action = ControlAction(doc["action"])
     except ValueError:
         choices = ", ".join(a.value for a in ControlAction)
-        raise ValueError(f"control action must be one of {choices}, got {doc['action']!r}") \
-            from None
+        raise ValueError(f"control action must be one of {choices}, got "
+                         f"{reprlib.repr(doc['action'])}") from None
     sysid = doc["sysid"]
     if isinstance(sysid, bool) or not isinstance(sysid, int):
-        raise ValueError(f"control sysid must be an integer, got {sysid!r}")
+        raise ValueError(f"control sysid must be an integer, got {reprlib.repr(sysid)}")
     return ControlCommand(action, sysid)

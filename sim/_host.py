@@ -40,7 +40,7 @@ from gcs.wire import SigningKey, SimTruth, load_signing_key, vec3
 from sim._config import WorldConfig
 from sim._fabric import HostFabric
 from sim._faults import ControlAction, parse_control
-from sim._inbox import ClockAck, ControlMessage, Inbox, InboxItem, Received, Stop
+from sim._inbox import ClockAck, ControlMessage, Inbox, InboxItem, Received, Refusals, Stop
 from sim._options import HostOptions
 from sim._pacing import Pacer
 from sim._priority import BackgroundStepping
@@ -50,8 +50,8 @@ from sim._udp import UdpPorts
 from vehicles import AutopilotConfig
 from vehicles.endpoint import VehicleEndpoint
 
-__all__ = ["CHUNK_S", "CLOCK_REPUBLISH_S", "LIFT_LAG_S", "TRUTH_PERIOD_S", "SimHost",
-           "VehicleStatus"]
+__all__ = ["ACK_MAX_LEAD_S", "CHUNK_S", "CLOCK_REPUBLISH_S", "LIFT_LAG_S", "TRUTH_PERIOD_S",
+           "SimHost", "VehicleStatus"]
 
 _log = logging.getLogger(__name__)
 
@@ -66,6 +66,10 @@ CLOCK_REPUBLISH_S = 0.1
 
 LIFT_LAG_S = 0.05
 """A paced host this far behind wall time steps at normal CPU priority until it caught up, s."""
+
+ACK_MAX_LEAD_S = 5.0
+"""A clock ack further ahead of the sim's time than this is refused, s: a GCS acks only
+times it was sent, and a forged ack of t = 1e9 would let a lockstep sim run free."""
 
 _EPS = 1e-9
 
@@ -99,6 +103,7 @@ class SimHost:
             autopilot_config=autopilot_config)
         self._world.run(self._autopilot, CHUNK_S)  # warm-up: compile or load the kernels now
         self._inbox = Inbox()
+        self._refusals = Refusals()
         self._status = [VehicleStatus.LIVE] * len(self._sysids)
         self._pacer = Pacer(options.speed)
         self._due: float | None = None  # wall time the chunk being stepped was due (paced)
@@ -118,7 +123,7 @@ class SimHost:
         self._fabric = HostFabric(options.zenoh_settings(),
                                   fleet=options.fleet or cfg.gcs.fleet, sysids=self._sysids,
                                   inbox=self._inbox, on_frame=self._receive,
-                                  announce_sent=options.lockstep)
+                                  announce_sent=options.lockstep, refusals=self._refusals)
         try:
             if options.udp:
                 self._udp = UdpPorts(len(self._sysids), base_port=options.udp_base_port,
@@ -197,15 +202,25 @@ class SimHost:
             self._world.run(self._autopilot, CHUNK_S)
             self._after_chunk()
 
+    @property
+    def refusals(self) -> dict[str, int]:
+        """Inputs refused so far by kind (oversize payloads, malformed control messages and
+        acks), beside what each endpoint's decoder counts."""
+        return self._refusals.counts()
+
     def close(self) -> None:
         """Log each vehicle's link counters, then close zenoh and UDP; idempotent."""
-        for endpoint in self._endpoints:
+        for k, endpoint in enumerate(self._endpoints):
             c = endpoint.counters()
             _log.info("vehicle %d: %d frames, %d garbage bytes, %d dropped, %d not for it, "
-                      "%d setpoints (%d refused), %d commands", endpoint.sysid, c.decode.frames,
-                      c.decode.garbage_bytes, c.decode.dropped, c.not_for_us,
+                      "%d oversize payloads, %d setpoints (%d refused), %d commands",
+                      endpoint.sysid, c.decode.frames, c.decode.garbage_bytes, c.decode.dropped,
+                      c.not_for_us, self._fabric.oversize(k),
                       c.setpoints_accepted + c.setpoints_refused, c.setpoints_refused,
                       c.commands)
+        summary = self._refusals.summary()
+        if summary:
+            _log.info("refused inputs: %s", summary)
         self._fabric.close()
         if self._udp is not None:
             self._udp.close()
@@ -268,7 +283,11 @@ class SimHost:
             if self._status[event.index] is VehicleStatus.LIVE:
                 self._endpoints[event.index].apply(event.inbound, self.t)
         elif isinstance(event, ClockAck):
-            self._acked = max(self._acked, event.t)
+            if event.t > self.t + ACK_MAX_LEAD_S:  # a GCS acks times it was sent
+                self._refusals.refuse("clock ack", f"for t = {event.t:g} s, far ahead of the "
+                                                   f"sim's {self.t:g} s")
+            else:
+                self._acked = max(self._acked, event.t)
         elif isinstance(event, ControlMessage):
             self._control(event.data)
         else:
@@ -279,15 +298,15 @@ class SimHost:
         try:
             command = parse_control(data)
         except ValueError as exc:
-            _log.warning("ignored control message: %s", exc)
+            self._refusals.refuse("control message", str(exc))
             return
         if command.sysid not in self._sysids:
-            _log.warning("ignored control message: no vehicle %d", command.sysid)
+            self._refusals.refuse("control message", f"no vehicle {str(command.sysid)[:40]}")
             return
         k = self._sysids.index(command.sysid)
         status = self._status[k]
         if status is VehicleStatus.KILLED:
-            _log.warning("ignored control message: vehicle %d is dead", command.sysid)
+            self._refusals.refuse("control message", f"vehicle {command.sysid} is dead")
             return
         self._status[k] = _NEXT_STATUS[command.action]
         if command.action is ControlAction.KILL:

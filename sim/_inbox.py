@@ -8,17 +8,33 @@ it waits for wall time), so inbound setpoints and commands act at
 well-defined sim times and no lock guards the simulation. A
 :class:`queue.SimpleQueue` is used because its ``put`` is safe even from a
 signal handler.
+
+What is refused on the way (a payload too long, a malformed control message
+or ack) is counted in :class:`Refusals`, which logs the first of each kind
+at once and then at most one line per kind every
+:data:`REFUSAL_REPORT_PERIOD_S`: a flood of junk must not become a flood
+on stderr.
 """
 
 from __future__ import annotations
 
+import logging
 import queue
-from collections.abc import Sequence
+import threading
+import time
+from collections import Counter
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from vehicles.endpoint import Inbound
 
-__all__ = ["ClockAck", "ControlMessage", "Inbox", "InboxItem", "Received", "Stop"]
+__all__ = ["REFUSAL_REPORT_PERIOD_S", "ClockAck", "ControlMessage", "Inbox", "InboxItem",
+           "Received", "Refusals", "Stop"]
+
+_log = logging.getLogger(__name__)
+
+REFUSAL_REPORT_PERIOD_S = 5.0
+"""At most one log line per kind of refused input in this much wall time, s."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -69,3 +85,39 @@ class Inbox:
             return self._queue.get(timeout=timeout_s)
         except queue.Empty:
             return None
+
+
+class Refusals:
+    """Counts refused inputs by kind (e.g. ``"control message"``); any thread."""
+
+    def __init__(self, *, wall_clock: Callable[[], float] = time.monotonic) -> None:
+        self._wall = wall_clock
+        self._lock = threading.Lock()
+        self._counts: Counter[str] = Counter()
+        self._unreported: Counter[str] = Counter()
+        self._reported_at: dict[str, float] = {}
+
+    def refuse(self, kind: str, why: str) -> None:
+        """Count one refused ``kind`` of input; log it unless one was logged lately."""
+        now = self._wall()
+        with self._lock:
+            self._counts[kind] += 1
+            last = self._reported_at.get(kind)
+            if last is not None and now - last < REFUSAL_REPORT_PERIOD_S:
+                self._unreported[kind] += 1
+                return
+            self._reported_at[kind] = now
+            more = self._unreported.pop(kind, 0)
+        if more:
+            _log.warning("ignored %s: %s (and %d more since the last report)", kind, why, more)
+        else:
+            _log.warning("ignored %s: %s", kind, why)
+
+    def counts(self) -> dict[str, int]:
+        """Refusals so far per kind."""
+        with self._lock:
+            return dict(self._counts)
+
+    def summary(self) -> str:
+        """One line, e.g. ``"control message 2, clock ack 1"`` ('' if nothing was refused)."""
+        return ", ".join(f"{kind} {n}" for kind, n in sorted(self.counts().items()))

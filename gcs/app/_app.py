@@ -35,8 +35,20 @@ from gcs.loop import (
     StepGate,
     WallClock,
 )
-from gcs.transport import Arrivals, FrameDirection, ZenohSettings, open_session
-from gcs.wire import MavlinkEncoder, MavMessage, SimTruth, decode_clock, encode_time, keys, mavlink
+from gcs.transport import Arrivals, FrameDirection, ZenohSettings, bounded_payload, open_session
+from gcs.wire import (
+    CLOCK_MAX_BYTES,
+    TRUTH_MAX_BYTES,
+    ClockGuard,
+    ClockVerdict,
+    MavlinkEncoder,
+    MavMessage,
+    SimTruth,
+    decode_clock,
+    encode_time,
+    keys,
+    mavlink,
+)
 
 __all__ = ["LOOP_GIL_SWITCH_S", "GcsApp"]
 
@@ -46,6 +58,9 @@ SIM_CLOCK_TIMEOUT_S = HOLD_CAP_S + 5.0
 than a lockstep window may hold the sim (``HOLD_CAP_S``), so a phase action that keeps a
 window open to its cap (commands to a dead vehicle, retried in wall time) does not read
 as a dead simulator."""
+
+CLOCK_NOTE_PERIOD_S = 5.0
+"""At most one event about refused clock samples per this much wall time, s."""
 
 ECHO_WAIT = 1.0
 """Longest wall time a lockstep ack waits for a vehicle's setpoint echoes, s. Long, so that
@@ -151,7 +166,13 @@ class GcsApp:
         self.truth: SimTruth | None = None
         self._truth_arrivals = Arrivals()
         self.truth_errors = 0
+        """Truth samples refused: malformed or longer than ``TRUTH_MAX_BYTES``."""
         self.clock_errors = 0
+        """Clock samples refused as malformed or longer than ``CLOCK_MAX_BYTES``."""
+        self.clock_refused = 0
+        """Clock samples refused by the guard: backwards, too far ahead (:class:`ClockGuard`)."""
+        self._clock_guard = ClockGuard()
+        self._clock_noted: float | None = None  # wall time of the last event about them
         self.clock: Clock
         self._ack: zenoh.Publisher | None = None
         self._last_ack: bytes | None = None
@@ -223,22 +244,46 @@ class GcsApp:
         self.runtime.note(level, text)
 
     def _on_clock(self, sample: zenoh.Sample) -> None:
+        data = bounded_payload(sample, CLOCK_MAX_BYTES)
         try:
-            clock = decode_clock(bytes(sample.payload.to_bytes()))
+            if data is None:
+                raise ValueError(f"{len(sample.payload)} bytes")
+            clock = decode_clock(data)
         except ValueError:
             self.clock_errors += 1
             return
         t = clock.t
+        assert isinstance(self.clock, ExternalClock)
+        last = self._clock_guard.last
+        verdict = self._clock_guard.check(t)
+        if not verdict.accepted:
+            # Anyone can publish on the clock key: a forged sample must not throw the
+            # clock years ahead (a follower's clock never comes back).
+            self.clock_refused += 1
+            self._note_refused_clock(t, last, verdict.value)
+            return
+        if verdict is ClockVerdict.REANCHORED:
+            self._note("warning", f"the simulator clock leapt from t = {last:.3f} s to "
+                                  f"{t:.3f} s: following it")
         if self._ack is not None and clock.truth is not None:
             # Lockstep: the tick at t reads every payload and truth sample sent before t, on
             # every run (the clock can overtake them: another priority, another thread).
             self.links.wait_received(clock.sent, ECHO_WAIT)
             self._truth_arrivals.wait({"truth": clock.truth}, ECHO_WAIT)
-        assert isinstance(self.clock, ExternalClock)
         if self._ack is not None and t <= self.clock.now() and self._last_ack is not None:
             # A repeated sample: the sim is waiting; our ack may have been lost.
             self._ack.put(self._last_ack)
         self.clock.advance(t)
+
+    def _note_refused_clock(self, t: float, last: float | None, why: str) -> None:
+        """An event for the first refused clock sample, then at most one per period."""
+        now = time.monotonic()
+        if self._clock_noted is not None and now - self._clock_noted < CLOCK_NOTE_PERIOD_S:
+            return
+        self._clock_noted = now
+        following = "nothing yet" if last is None else f"t = {last:.3f} s"
+        self._note("warning", f"refused simulator clock sample t = {t:g} s ({why}; following "
+                              f"{following}; {self.clock_refused} refused so far)")
 
     def _send_ack(self, t: float) -> None:
         """Let the sim run the next period, once it has taken this tick's setpoints.
@@ -254,8 +299,11 @@ class GcsApp:
         self._ack.put(self._last_ack)
 
     def _on_truth(self, sample: zenoh.Sample) -> None:
+        data = bounded_payload(sample, TRUTH_MAX_BYTES)
         try:
-            self.truth = SimTruth.from_bytes(bytes(sample.payload.to_bytes()))
+            if data is None:
+                raise ValueError(f"{len(sample.payload)} bytes")
+            self.truth = SimTruth.from_bytes(data)
         except ValueError:
             self.truth_errors += 1  # dropped; the next sample replaces it
         self._truth_arrivals.arrived("truth")

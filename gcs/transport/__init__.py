@@ -20,10 +20,18 @@ from gcs.transport._arrivals import Arrivals
 from gcs.transport._mavutil_transport import MavutilTransport, is_connection_string
 from gcs.transport._protocol import FrameDirection, Transport
 from gcs.transport._zenoh_session import DEFAULT_ENDPOINT, ZenohSettings, open_session
-from gcs.transport._zenoh_transport import FleetReceiver, ZenohTransport, declare_alive, watch_alive
+from gcs.transport._zenoh_transport import (
+    MAVLINK_PAYLOAD_MAX,
+    FleetReceiver,
+    ZenohTransport,
+    bounded_payload,
+    declare_alive,
+    watch_alive,
+)
 
 __all__ = [
     "DEFAULT_ENDPOINT",
+    "MAVLINK_PAYLOAD_MAX",
     "Arrivals",
     "FleetReceiver",
     "FrameDirection",
@@ -31,6 +39,7 @@ __all__ = [
     "Transport",
     "ZenohSettings",
     "ZenohTransport",
+    "bounded_payload",
     "declare_alive",
     "is_connection_string",
     "open_session",

@@ -10,6 +10,11 @@ on loopback (bench/link_latency.py, bench/gcs_tick.py): 100 setpoints of one
 tick take 0.4 ms to publish instead of 20-40 ms, and the setpoint round trip
 falls from 2.6-3.3 ms to 0.6-0.8 ms (p50), because the sim's telemetry no
 longer blocks its loop; an idle link still sends a lone frame at once.
+
+Anyone on the fabric can publish on a vehicle's keys: a payload longer than
+:data:`MAVLINK_PAYLOAD_MAX` is dropped before it is copied out of zenoh, and
+counted (``oversize``). 10 MB of MAVLink start bytes, each a candidate frame,
+kept a decoder busy for 1.6 s and slowed the sim tenfold while they came.
 """
 
 from __future__ import annotations
@@ -24,9 +29,22 @@ import zenoh
 from gcs.transport._arrivals import Arrivals
 from gcs.wire import keys
 
-__all__ = ["FleetReceiver", "ZenohTransport", "declare_alive", "watch_alive"]
+__all__ = ["MAVLINK_PAYLOAD_MAX", "FleetReceiver", "ZenohTransport", "bounded_payload",
+           "declare_alive", "watch_alive"]
 
 _log = logging.getLogger(__name__)
+
+MAVLINK_PAYLOAD_MAX = 65_535
+"""Longest payload taken on a vehicle's MAVLink key, bytes: what a UDP datagram can hold
+(a vehicle's telemetry of one step is about 1 kB, a frame at most 280 bytes)."""
+
+
+def bounded_payload(sample: zenoh.Sample, limit: int) -> bytes | None:
+    """The sample's payload, or None, without copying it, if it is longer than ``limit``."""
+    payload = sample.payload
+    if len(payload) > limit:
+        return None
+    return payload.to_bytes()
 
 
 class FleetReceiver:
@@ -38,8 +56,12 @@ class FleetReceiver:
     transport registered for the system id in its key.
     """
 
-    def __init__(self, session: zenoh.Session, *, fleet: str, direction: keys.Direction) -> None:
+    def __init__(self, session: zenoh.Session, *, fleet: str, direction: keys.Direction,
+                 max_payload: int = MAVLINK_PAYLOAD_MAX) -> None:
         self._direction = direction
+        self._max_payload = max_payload
+        self.oversize = 0
+        """Payloads dropped for being longer than ``max_payload`` bytes."""
         self._handlers: dict[int, Callable[[bytes], None]] = {}
         self._arrivals = Arrivals()  # payloads per system id, registered or not
         self._subscriber: zenoh.Subscriber | None = session.declare_subscriber(
@@ -69,7 +91,11 @@ class FleetReceiver:
         sysid = parsed[0]
         handler = self._handlers.get(sysid)
         if handler is not None:
-            handler(sample.payload.to_bytes())
+            data = bounded_payload(sample, self._max_payload)
+            if data is None:
+                self.oversize += 1
+            else:
+                handler(data)
         self._arrivals.arrived(sysid)  # after the handler: a waiter goes on once it is in
 
     def wait_received(self, sent: Mapping[int, int], timeout_s: float) -> bool:
@@ -89,11 +115,15 @@ class ZenohTransport:
                  description: str | None = None,
                  congestion: zenoh.CongestionControl = zenoh.CongestionControl.DROP,
                  priority: zenoh.Priority = zenoh.Priority.DATA,
-                 receiver: FleetReceiver | None = None) -> None:
+                 receiver: FleetReceiver | None = None,
+                 max_payload: int = MAVLINK_PAYLOAD_MAX,
+                 on_oversize: Callable[[int], object] | None = None) -> None:
         """``receiver``: receive through a shared :class:`FleetReceiver` (for the system
-        id in ``rx_key``) instead of a subscriber of this transport's own. ``priority``:
-        zenoh queues each priority apart, so a higher one is not stuck behind a backlog
-        of lower ones."""
+        id in ``rx_key``, which bounds the payloads itself) instead of a subscriber of this
+        transport's own. ``priority``: zenoh queues each priority apart, so a higher one is
+        not stuck behind a backlog of lower ones. ``max_payload``: longer payloads
+        received are dropped and counted (:attr:`oversize`), and ``on_oversize(length)``
+        is told of each (on zenoh's thread; without a ``receiver``)."""
         self._session = session
         self._receiver = receiver
         parsed = keys.parse_mavlink(rx_key)
@@ -114,6 +144,9 @@ class ZenohTransport:
         self._send_lock = threading.Lock()
         self.callback_errors = 0
         """Exceptions raised by the receive callback (logged, then counted)."""
+        self._max_payload = max_payload
+        self._oversize = 0
+        self._on_oversize = on_oversize
 
     @classmethod
     def for_gcs(cls, session: zenoh.Session, *, fleet: str, sysid: int,
@@ -143,6 +176,14 @@ class ZenohTransport:
         return True
 
     @property
+    def oversize(self) -> int:
+        """Payloads received and dropped for being too long (through the shared
+        :class:`FleetReceiver`, if any, for the whole fleet)."""
+        if self._receiver is not None:
+            return self._receiver.oversize
+        return self._oversize
+
+    @property
     def description(self) -> str:
         """The keys this transport uses."""
         return self._description
@@ -164,8 +205,17 @@ class ZenohTransport:
                 self._receiver.register(self._rx_sysid, deliver)
             else:
                 self._subscriber = self._session.declare_subscriber(
-                    self._rx_key, lambda sample: deliver(sample.payload.to_bytes()))
+                    self._rx_key, lambda sample: self._bounded(sample, deliver))
             self._started = True
+
+    def _bounded(self, sample: zenoh.Sample, deliver: Callable[[bytes], None]) -> None:
+        data = bounded_payload(sample, self._max_payload)
+        if data is None:
+            self._oversize += 1
+            if self._on_oversize is not None:
+                self._on_oversize(len(sample.payload))
+        else:
+            deliver(data)
 
     def send(self, frame: bytes) -> None:
         """Publish one payload (any thread); dropped silently after close."""

@@ -31,7 +31,15 @@ Modules:
 """
 
 from gcs.common import lazy_modules
-from gcs.wire._clockwire import decode_clock, decode_time, encode_clock, encode_time
+from gcs.wire._clockwire import (
+    CLOCK_MAX_BYTES,
+    ClockGuard,
+    ClockVerdict,
+    decode_clock,
+    decode_time,
+    encode_clock,
+    encode_time,
+)
 from gcs.wire._decoder import DecodeStats, FrameDecoder
 from gcs.wire._dialect import MavMessage, command_name, mavlink, message_id
 from gcs.wire._encoder import (
@@ -65,10 +73,11 @@ from gcs.wire._setpoints import (
     read_setpoint,
 )
 from gcs.wire._signing import SigningKey, load_signing_key
-from gcs.wire._simtruth import SimTruth, vec3
+from gcs.wire._simtruth import TRUTH_MAX_BYTES, SimTruth, vec3
 from gcs.wire._stamp import crc_accumulate
 from gcs.wire._telemetry import (
     OFFBOARD_LOST_TEXT,
+    TELEMETRY_MAX_ABS,
     Attitude,
     Heartbeat,
     LocalPosition,
@@ -82,14 +91,19 @@ from gcs.wire._telemetry import (
 from gcs.wire._unpack import unpack_v2
 
 __all__ = [
+    "CLOCK_MAX_BYTES",
     "CUSTOM_MODE_ENABLED",
     "DEFAULT_GCS_COMPONENT_ID",
     "DEFAULT_GCS_SYSTEM_ID",
     "OFFBOARD_LOST_TEXT",
     "SAFETY_ARMED",
     "SETPOINT_MESSAGE",
+    "TELEMETRY_MAX_ABS",
+    "TRUTH_MAX_BYTES",
     "AccelSetpoint",
     "Attitude",
+    "ClockGuard",
+    "ClockVerdict",
     "CommandResult",
     "CopterMode",
     "DecodeStats",

@@ -4,6 +4,12 @@ The receiving thread replaces a record whenever a message arrives; the GCS
 loop takes a :class:`Telemetry` snapshot, which is a consistent set of
 references that later messages cannot change under it. Frames: NED
 navigation frame, FRD body frame, SI units, radians.
+
+A message whose values the GCS reads are not finite, or beyond
+:data:`TELEMETRY_MAX_ABS`, is refused and counted
+(:attr:`TelemetryStore.refused`), never stored: an ATTITUDE with infinite
+angles raised "math domain error" on the receive thread, a traceback per
+message, and a vehicle "at" 1e38 m is no position the loop can fly by.
 """
 
 from __future__ import annotations
@@ -20,6 +26,7 @@ from gcs.wire._modes import SAFETY_ARMED
 
 __all__ = [
     "OFFBOARD_LOST_TEXT",
+    "TELEMETRY_MAX_ABS",
     "Attitude",
     "Heartbeat",
     "Imu",
@@ -33,6 +40,10 @@ __all__ = [
 ]
 
 Vec3 = tuple[float, float, float]
+
+TELEMETRY_MAX_ABS = 1e6
+"""Largest magnitude of a telemetry value taken (m, m/s, m/s^2, rad, rad/s): beyond any
+flight of a team (a local frame of 1000 km), and far below what overflows a square."""
 
 
 class Severity(IntEnum):
@@ -178,7 +189,9 @@ class TelemetryStore:
         self.imu: Imu | None = None
         self.status: SystemStatus | None = None
         self._texts: deque[StatusText] = deque(maxlen=status_text_history)
-        self._handlers: dict[str, Callable[[MavMessage, float], TelemetryRecord]] = {
+        self.refused = 0
+        """Telemetry messages refused: a value not finite or beyond :data:`TELEMETRY_MAX_ABS`."""
+        self._handlers: dict[str, Callable[[MavMessage, float], TelemetryRecord | None]] = {
             "HEARTBEAT": self._heartbeat,
             "LOCAL_POSITION_NED": self._position,
             "ATTITUDE": self._attitude,
@@ -189,9 +202,15 @@ class TelemetryStore:
         }
 
     def update(self, msg: MavMessage, now: float) -> TelemetryRecord | None:
-        """Take ``msg`` if it is telemetry; the new record, or None if ``msg`` is not one."""
+        """Take ``msg`` if it is telemetry; the new record, or None if ``msg`` is not one or
+        was refused (counted in :attr:`refused`)."""
         handler = self._handlers.get(msg.get_type())
-        return None if handler is None else handler(msg, now)
+        if handler is None:
+            return None
+        record = handler(msg, now)
+        if record is None:
+            self.refused += 1
+        return record
 
     def snapshot(self) -> Telemetry:
         """The current records as one immutable snapshot."""
@@ -203,28 +222,34 @@ class TelemetryStore:
                                    m.system_status, m.autopilot, m.type, now)
         return self.heartbeat
 
-    def _position(self, m: MavMessage, now: float) -> LocalPosition:
-        self.position = LocalPosition((m.x, m.y, m.z), (m.vx, m.vy, m.vz),
-                                      m.time_boot_ms / 1000.0, now)
+    def _position(self, m: MavMessage, now: float) -> LocalPosition | None:
+        p, v = (m.x, m.y, m.z), (m.vx, m.vy, m.vz)
+        if not _usable(*p, *v):
+            return None
+        self.position = LocalPosition(p, v, m.time_boot_ms / 1000.0, now)
         return self.position
 
-    def _attitude(self, m: MavMessage, now: float) -> Attitude:
-        rpy = (m.roll, m.pitch, m.yaw)
-        self.attitude = Attitude(_quaternion_from_rpy(rpy), rpy,
-                                 (m.rollspeed, m.pitchspeed, m.yawspeed),
+    def _attitude(self, m: MavMessage, now: float) -> Attitude | None:
+        rpy, rates = (m.roll, m.pitch, m.yaw), (m.rollspeed, m.pitchspeed, m.yawspeed)
+        if not _usable(*rpy, *rates):
+            return None
+        self.attitude = Attitude(_quaternion_from_rpy(rpy), rpy, rates,
                                  m.time_boot_ms / 1000.0, now)
         return self.attitude
 
-    def _attitude_quaternion(self, m: MavMessage, now: float) -> Attitude:
-        q = (m.q1, m.q2, m.q3, m.q4)
-        self.attitude = Attitude(q, _rpy_from_quaternion(q),
-                                 (m.rollspeed, m.pitchspeed, m.yawspeed),
+    def _attitude_quaternion(self, m: MavMessage, now: float) -> Attitude | None:
+        q, rates = (m.q1, m.q2, m.q3, m.q4), (m.rollspeed, m.pitchspeed, m.yawspeed)
+        if not _usable(*q, *rates):
+            return None
+        self.attitude = Attitude(q, _rpy_from_quaternion(q), rates,
                                  m.time_boot_ms / 1000.0, now)
         return self.attitude
 
-    def _imu(self, m: MavMessage, now: float) -> Imu:
-        self.imu = Imu((m.xacc, m.yacc, m.zacc), (m.xgyro, m.ygyro, m.zgyro),
-                       m.time_usec / 1e6, now)
+    def _imu(self, m: MavMessage, now: float) -> Imu | None:
+        accel, gyro = (m.xacc, m.yacc, m.zacc), (m.xgyro, m.ygyro, m.zgyro)
+        if not _usable(*accel, *gyro):
+            return None
+        self.imu = Imu(accel, gyro, m.time_usec / 1e6, now)
         return self.imu
 
     def _sys_status(self, m: MavMessage, now: float) -> SystemStatus:
@@ -248,6 +273,11 @@ class TelemetryStore:
         record = StatusText(severity, text, now)
         self._texts.append(record)
         return record
+
+
+def _usable(*values: float) -> bool:
+    """Whether every value is finite and within :data:`TELEMETRY_MAX_ABS` (NaN is not)."""
+    return all(-TELEMETRY_MAX_ABS <= x <= TELEMETRY_MAX_ABS for x in values)
 
 
 def _quaternion_from_rpy(rpy: Vec3) -> tuple[float, float, float, float]:
