@@ -18,7 +18,7 @@ payloads), and checks the same properties for every input:
   bytes moved one of its counters, a refused telemetry message is counted by
   its store, a refused parse is a ValueError.
 
-Entry points: ``sim_control`` (:func:`sim._faults.parse_control`), ``clock``
+Entry points: ``sim_control`` (:func:`sim.parse_control`), ``clock``
 (:func:`gcs.wire.decode_clock` and a :class:`gcs.wire.ClockGuard`),
 ``sim_truth`` (:meth:`gcs.wire.SimTruth.from_bytes`), ``gcs_frames``
 (:class:`gcs.wire.FrameDecoder`, datagram, stream and signed),
@@ -146,7 +146,7 @@ def json_bytes(rng: random.Random, value: object) -> bytes:
 
 
 def control_input(rng: random.Random) -> bytes:
-    from sim._faults import ControlAction, ControlCommand
+    from sim import ControlAction, ControlCommand
 
     real = ControlCommand(rng.choice(list(ControlAction)), rng.randrange(-2, 260)).to_bytes()
     pick = rng.randrange(6)
@@ -216,8 +216,7 @@ def truth_input(rng: random.Random) -> bytes:
 def frame(msgid: int, payload: bytes, *, sysid: int = 245, compid: int = 190, seq: int = 0,
           incompat: int = 0) -> bytes:
     """A MAVLink 2 frame of ``msgid`` around ``payload`` with a good checksum (any payload)."""
-    from gcs.wire import mavlink
-    from gcs.wire._crc import frame_crc
+    from gcs.wire import frame_crc, mavlink
 
     cls = mavlink.mavlink_map.get(msgid)
     header = bytes((0xFD, len(payload), incompat, 0, seq & 0xFF, sysid, compid,
@@ -292,7 +291,7 @@ def frames_input(rng: random.Random, msgids: list[int], target: int = 0) -> byte
 # -- entry points -------------------------------------------------------------------------------
 
 def _control(rng: random.Random, tally: Tally) -> Callable[[], None]:
-    from sim._faults import parse_control
+    from sim import parse_control
 
     def one() -> None:
         data = control_input(rng)

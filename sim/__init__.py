@@ -47,6 +47,7 @@ Modules:
 
 from sim._backend import PhysicsBackend
 from sim._config import WorldConfig, load_world_config
+from sim._faults import ControlAction, ControlCommand, parse_control
 from sim._host import LIFT_LAG_S
 from sim._layout import Layout, paper_square, ring_layout
 from sim._priority import BackgroundStepping
@@ -65,6 +66,8 @@ __all__ = [
     "DEFAULT_WORLD_CONFIG",
     "LIFT_LAG_S",
     "BackgroundStepping",
+    "ControlAction",
+    "ControlCommand",
     "Layout",
     "PhysicsBackend",
     "World",
@@ -72,6 +75,7 @@ __all__ = [
     "build_team",
     "load_world_config",
     "paper_square",
+    "parse_control",
     "ring_layout",
     "take_off",
 ]

@@ -40,6 +40,7 @@ from gcs.wire._clockwire import (
     encode_clock,
     encode_time,
 )
+from gcs.wire._crc import frame_crc
 from gcs.wire._decoder import DecodeStats, FrameDecoder
 from gcs.wire._dialect import MavMessage, command_name, mavlink, message_id
 from gcs.wire._encoder import (
@@ -136,6 +137,7 @@ __all__ = [
     "distinct_rows",
     "encode_clock",
     "encode_time",
+    "frame_crc",
     "heartbeat_mode_text",
     "keys",
     "load_signing_key",
