@@ -11,11 +11,10 @@ without setpoints (time is the subject there).
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 
 import numpy as np
 
@@ -26,7 +25,8 @@ from gcs.loop import FleetState, Phase, RuntimeSnapshot
 from gcs.loop._runtime import HOLD_KP, HOLD_KV
 from gcs.transport import ZenohSettings
 from gcs.wire import SimMode
-from tests.test_safety_flight import break_vehicle, sim_sleep
+from tests.test_safety_flight import break_vehicle, in_formation, sim_sleep
+from tests.test_setpoint_stream import hovering
 
 TEAM = load_team("configs/bebop_square.yaml")
 OFFBOARD = ("OFFBOARD",) * 4
@@ -36,20 +36,6 @@ def with_safety(team: Team, **changes: object) -> Team:
     cfg = team.config
     return dataclasses.replace(team, config=dataclasses.replace(
         cfg, safety=dataclasses.replace(cfg.safety, **changes)))
-
-
-@contextlib.contextmanager
-def formation(team: Team = TEAM) -> Iterator[GcsApp]:
-    """The team in formation flight with the payload lifted (lockstep)."""
-    endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
-    with SimProcess(team.source, endpoint=endpoint, speed="max", lockstep=True), \
-            GcsApp(team, zenoh_settings=ZenohSettings(connect=(endpoint,)), sim_clock=True,
-                   lockstep=True) as app:
-        app.start()
-        play(Scenario(name="up", steps=(Step(action="arm"), Step(action="takeoff"),
-                                          Step(action="lift"))), app.runtime, app.clock)
-        assert app.runtime.phase is Phase.FORMATION
-        yield app
 
 
 def fly_sticks(app: GcsApp, seconds: float, forward: float = 0.0, right: float = 0.0,
@@ -75,7 +61,7 @@ def lose_every_radio(app: GcsApp, seconds: float) -> None:
 
 
 def test_a_lost_second_on_every_radio_is_flown_through() -> None:
-    with formation() as app:
+    with in_formation() as app:
         fly_sticks(app, 1.0, forward=0.6)
         lose_every_radio(app, 1.2)
         modes_seen: set[str] = set()
@@ -93,7 +79,7 @@ def test_setpoints_lost_on_the_way_are_told_by_the_vehicle_and_recovered() -> No
     """Vehicle 2's setpoints vanish on the way for 1 s while its telemetry flows and the
     GCS sends on time: only the vehicle knows; its failsafe message (as PX4 announces one)
     tells the GCS that the stream, not a pilot, took it out of OFFBOARD."""
-    with formation() as app:
+    with in_formation() as app:
         fly_sticks(app, 1.0, forward=0.6)
         fanout = app.runtime._fanout
         send = fanout.send
@@ -117,7 +103,7 @@ def test_setpoints_lost_on_the_way_are_told_by_the_vehicle_and_recovered() -> No
 
 
 def test_with_the_operator_policy_the_team_waits_for_resume_and_says_so() -> None:
-    with formation(with_safety(TEAM, recovery="operator")) as app:
+    with in_formation(with_safety(TEAM, recovery="operator")) as app:
         lose_every_radio(app, 1.2)
         fly_sticks(app, 4.0, forward=0.6)
         snap = app.runtime.snapshot
@@ -131,7 +117,7 @@ def test_with_the_operator_policy_the_team_waits_for_resume_and_says_so() -> Non
 
 
 def test_a_pilots_mode_switch_is_not_overruled() -> None:
-    with formation() as app:
+    with in_formation() as app:
         fly_sticks(app, 1.0, forward=0.6)
         app.links.profiles[3].set_mode(SimMode.HOLD)
         fly_sticks(app, 4.0, forward=0.6)
@@ -165,7 +151,7 @@ def true_errors(snap: RuntimeSnapshot) -> float:
 def test_positions_that_disagree_with_the_shape_hold_the_team_instead_of_tearing_it() -> None:
     """Shape keeping on a vehicle 1.4 m out of place by its frame alone would drag the real
     team apart; holding (each vehicle on its own point) keeps it together, and says why."""
-    with formation() as app:
+    with in_formation() as app:
         shifted(app, lambda _t: 1.4)
         worst: list[float] = []
         fly_sticks(app, 8.0, each=lambda s: worst.append(true_errors(s)))
@@ -201,7 +187,7 @@ def test_a_start_out_of_shape_holds_at_hover_and_says_why() -> None:
 
 
 def test_a_deformation_that_keeps_growing_while_holding_lands_the_team() -> None:
-    with formation() as app:
+    with in_formation() as app:
         t0 = app.clock.now()
         shifted(app, lambda t: 1.4 + 0.2 * (t - t0))
         fly_sticks(app, 4.0)
@@ -212,7 +198,7 @@ def test_a_deformation_that_keeps_growing_while_holding_lands_the_team() -> None
 
 def test_flown_east_at_full_stick_the_team_stops_at_the_fence_and_flies_back() -> None:
     fence = TEAM.config.safety.geofence_xy
-    with formation() as app:
+    with in_formation() as app:
         east: list[float] = []
 
         def reach(s: RuntimeSnapshot) -> None:
@@ -234,13 +220,7 @@ def test_a_loop_stall_leaves_no_vehicle_without_setpoints() -> None:
     """Real time: the loop thread is held for 0.85 s in one tick (a slow listener), so the
     next tick comes 0.6 s late; the re-send thread keeps every vehicle's setpoints coming,
     and the stall is reported."""
-    endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
-    with SimProcess(TEAM.source, endpoint=endpoint, speed="1"), \
-            GcsApp(TEAM, zenoh_settings=ZenohSettings(connect=(endpoint,))) as app:
-        app.start()
-        play(Scenario(name="up", steps=(Step(action="arm"), Step(action="takeoff"))),
-             app.runtime, app.clock)
-        assert app.runtime.phase is Phase.HOVER
+    with hovering() as app:
         stall = threading.Event()
         stall.set()
 

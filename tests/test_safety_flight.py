@@ -7,6 +7,7 @@ would.
 
 from __future__ import annotations
 
+import contextlib
 import time
 from collections.abc import Iterator
 
@@ -14,7 +15,7 @@ import pytest
 
 from gcs.app import GcsApp, SimProcess, free_tcp_port
 from gcs.app._scenario import Scenario, Step, play
-from gcs.config import load_team
+from gcs.config import Team, load_team
 from gcs.loop import Action, Phase
 from gcs.loop._clock import ClockStoppedError
 from gcs.loop._safety import SafetyReason
@@ -24,17 +25,24 @@ from gcs.wire import SimMode, keys
 TEAM = load_team("configs/bebop_square.yaml")
 
 
-@pytest.fixture
-def flying() -> Iterator[GcsApp]:
-    """The paper's team in formation flight with the payload lifted, forward stick held."""
+@contextlib.contextmanager
+def in_formation(team: Team = TEAM) -> Iterator[GcsApp]:
+    """``team`` in formation flight with the payload lifted, in lockstep with the real sim."""
     endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
-    with SimProcess(TEAM.source, endpoint=endpoint, speed="max", lockstep=True), \
-            GcsApp(TEAM, zenoh_settings=ZenohSettings(connect=(endpoint,)), sim_clock=True,
+    with SimProcess(team.source, endpoint=endpoint, speed="max", lockstep=True), \
+            GcsApp(team, zenoh_settings=ZenohSettings(connect=(endpoint,)), sim_clock=True,
                    lockstep=True) as app:
         app.start()
         play(Scenario(name="up", steps=(Step(action="arm"), Step(action="takeoff"),
                                           Step(action="lift"))), app.runtime, app.clock)
         assert app.runtime.phase is Phase.FORMATION
+        yield app
+
+
+@pytest.fixture
+def flying() -> Iterator[GcsApp]:
+    """The paper's team in formation flight with the payload lifted."""
+    with in_formation() as app:
         yield app
 
 
