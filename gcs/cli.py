@@ -43,11 +43,12 @@ def _cmd_fly(args: argparse.Namespace) -> int:
     import json
     from pathlib import Path
 
-    from gcs.app import fly, load_scenario
+    from gcs.app import check_scenario, fly, load_scenario
     from gcs.config import load_team
 
     team = load_team(args.config)
     scenario = load_scenario(args.scenario)
+    check_scenario(scenario, team, args.scenario)
     if args.speed != "max":
         try:
             if float(args.speed) <= 0:

@@ -63,7 +63,11 @@ def test_signed_team_flies_only_with_the_key(tmp_path: Path) -> None:
 
 
 def test_a_missing_key_file_is_a_config_error_before_anything_opens(tmp_path: Path) -> None:
+    with pytest.raises(ConfigError, match=r"links\[0\]\.signing_key: absent\.key"):
+        load_team(signed_team_file(tmp_path, "absent.key"))  # the team file refers to it
+    write_signing_key(tmp_path / "absent.key")
     team = load_team(signed_team_file(tmp_path, "absent.key"))
+    (tmp_path / "absent.key").unlink()  # gone after the team was loaded: the host says so
     with pytest.raises(ConfigError, match=r"absent\.key"):
         SimHost(team, HostOptions(listen=(f"tcp/127.0.0.1:{free_tcp_port()}",)),
                 world_config=load_world_config(DEFAULT_WORLD_CONFIG),

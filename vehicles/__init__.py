@@ -40,7 +40,7 @@ Modules:
 """
 
 from gcs.common import lazy_modules
-from vehicles._airframe import BEBOP2, Airframe, load_airframe
+from vehicles._airframe import BEBOP2, Airframe, check_airframe, load_airframe
 from vehicles._autopilot import Autopilot
 from vehicles._config import AutopilotConfig, load_autopilot_config
 from vehicles._kernel import autopilot_step
@@ -60,6 +60,7 @@ __all__ = [
     "Measurements",
     "RequestOutcome",
     "autopilot_step",
+    "check_airframe",
     "endpoint",
     "load_airframe",
     "load_autopilot_config",

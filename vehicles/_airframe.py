@@ -2,7 +2,9 @@
 
 Every field is required and has no default: an airframe is a physical vehicle,
 and a file that forgets its mass must be refused (one line naming the file and
-the field), not flown or analysed with another vehicle's figures. The Bebop 2
+the field), not flown or analysed with another vehicle's figures. So is an
+airframe no vehicle can be: rotors that cannot lift its weight, a thrust
+reference beyond them, impossible moments of inertia. The Bebop 2
 the paper flies is configs/airframes/bebop2.yaml (:func:`bebop2` loads it);
 the sources of its figures are noted there.
 """
@@ -12,9 +14,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from gcs.common import field, from_mapping, load_yaml, shipped_config
+from gcs.common import ConfigError, field, from_mapping, load_yaml, shipped_config
 
-__all__ = ["BEBOP2", "Airframe", "bebop2", "load_airframe"]
+__all__ = ["BEBOP2", "Airframe", "bebop2", "check_airframe", "load_airframe"]
+
+STANDARD_GRAVITY = 9.80665
+"""m/s^2: the weight an airframe must lift to hover (a team's own gravity is checked by the
+GCS's analysis)."""
 
 BEBOP2 = shipped_config("airframes/bebop2.yaml")
 """The paper's vehicle, the Parrot Bebop 2."""
@@ -47,9 +53,44 @@ class Airframe:
         return 4.0 * self.thrust_coefficient * self.rotor_speed_max**2
 
 
+def check_airframe(frame: Airframe, source: str, where: str = "") -> None:
+    """Refuse an airframe no physical vehicle can be (ConfigError naming ``source`` and the
+    field under ``where``): rotors that cannot lift its weight, a thrust reference beyond
+    them, principal moments of inertia that break the triangle inequality.
+
+    A check of what a file says, not of the class: a simulated autopilot may believe
+    its rotors weaker than they are (``dataclasses.replace``).
+    """
+
+    def at(name: str) -> str:
+        return f"{where}.{name}" if where else name
+
+    weight = frame.mass * STANDARD_GRAVITY
+    if not frame.thrust_max > weight:
+        raise ConfigError(source, at("thrust_coefficient"),
+                          f"4 x thrust_coefficient x rotor_speed_max^2 = "
+                          f"{frame.thrust_max:.3g} N at full rotor speed cannot lift the "
+                          f"weight {weight:.3g} N (mass {frame.mass:g} kg): the airframe "
+                          f"cannot hover")
+    if frame.thrust_reference > frame.thrust_max:
+        raise ConfigError(source, at("thrust_reference"),
+                          f"{frame.thrust_reference:g} N exceeds the full-speed thrust "
+                          f"{frame.thrust_max:.3g} N (4 x thrust_coefficient x "
+                          f"rotor_speed_max^2)")
+    for k, name in enumerate("xyz"):
+        others = sum(frame.inertia) - frame.inertia[k]
+        if frame.inertia[k] > others * (1.0 + 1e-9):
+            raise ConfigError(source, at("inertia"),
+                              f"I{name} {frame.inertia[k]:g} kg m^2 exceeds the sum of the "
+                              f"other two {others:g} kg m^2: the principal moments of a rigid "
+                              f"body satisfy the triangle inequality")
+
+
 def load_airframe(path: str | Path) -> Airframe:
-    """Load and validate an airframe file."""
-    return from_mapping(Airframe, load_yaml(path) or {}, str(path))
+    """Load and validate an airframe file (:func:`check_airframe` included)."""
+    frame = from_mapping(Airframe, load_yaml(path) or {}, str(path))
+    check_airframe(frame, str(path))
+    return frame
 
 
 def bebop2() -> Airframe:

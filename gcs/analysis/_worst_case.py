@@ -109,22 +109,30 @@ def gain_violation(terms: dict[str, float], per_unit: dict[str, float],
     excess = lhs - limit
     fixes = {GAIN_FIELDS[k]: (t - excess) / per_unit[k] for k, t in terms.items()
              if t > excess and per_unit[k] > 0}
-    shown = " + ".join(f"{k} {t:.3f}" for k, t in terms.items())
-    head = (f"gain condition (eq. max) violated: {shown} = {lhs:.3f} > {limit:.3f} m/s^2 "
-            f"by {excess:.3f}")
+    shown = " + ".join(f"{k} {_n(t)}" for k, t in terms.items())
+    head = (f"gain condition (eq. max) violated: {shown} = {_n(lhs)} > {_n(limit)} m/s^2 "
+            f"by {_n(excess)}")
     if not fixes:
         return Violation(" and ".join(GAIN_FIELDS.values()),
                          f"{head}; no gain alone can restore it: reduce several")
     alone = " or ".join(f"{name} <= {_floor3(v)}" for name, v in fixes.items())
-    cannot = [f"{GAIN_FIELDS[k]} (term {t:.3f})" for k, t in terms.items()
+    cannot = [f"{GAIN_FIELDS[k]} (term {_n(t)})" for k, t in terms.items()
               if GAIN_FIELDS[k] not in fixes]
     tail = f"; alone, not {', '.join(cannot)}" if cannot else ""
     return Violation(" or ".join(fixes), f"{head}; restored by {alone}{tail}", fixes)
 
 
 def _floor3(x: float) -> str:
-    """A bound printed to 3 decimals on its safe side (rounded down)."""
+    """A bound printed to 3 decimals on its safe side (rounded down); %g beyond 1e5."""
+    if not abs(x) < 1e5:
+        return _n(x)
     return f"{math.floor(x * 1000.0) / 1000.0:.3f}"
+
+
+def _n(x: float, digits: int = 3) -> str:
+    """A number in a message: ``digits`` decimals, or 4 significant digits (%g) when it is
+    too large for that to stay short (1e300 would print 300 digits)."""
+    return f"{x:.{digits}f}" if abs(x) < 1e5 else f"{x:.4g}"
 
 
 @dataclass(frozen=True)
@@ -226,6 +234,21 @@ def _kappa(team: Team) -> float:
     return float((np.abs(qhat) * f.slot_mask[..., None]).sum(axis=1).max())
 
 
+def _motion_warnings(unavailable: tuple[str, ...], mu_r: float) -> list[str]:
+    """What the sticks cannot do for a team whose vehicles have one edge each (a pair)."""
+    out = []
+    sticks = [stick for motion, stick in (("translate_x", "forward"), ("translate_y", "right"))
+              if motion in unavailable]
+    if sticks:
+        out.append(f"each vehicle has one edge, so the team moves along it only, never "
+                   f"sideways to it: the {' and '.join(sticks)} stick"
+                   f"{'s do' if len(sticks) > 1 else ' does'} nothing")
+    if "rotate" in unavailable and mu_r > 0:
+        out.append(f"the team cannot spin (each vehicle has one edge): "
+                   f"guidance.max_rotation_disagreement {mu_r:g} has no effect")
+    return out
+
+
 def analyze(team: Team) -> Analysis:
     """Run the worst-case analysis of a loaded team."""
     cfg = team.config
@@ -242,7 +265,7 @@ def analyze(team: Team) -> Analysis:
     r_nom = float(f.radii.max())
     if r_nom >= l:
         violations.append(Violation("payload.rope_length", f"ropes of {l:g} m cannot reach the "
-                                    f"centroid from {r_nom:.3f} m away"))
+                                    f"centroid from {_n(r_nom)} m away"))
         tension = eq_angle = math.inf
     else:
         tension = (M * g / n) * l / math.sqrt(l**2 - r_nom**2)
@@ -252,18 +275,25 @@ def analyze(team: Team) -> Analysis:
     thrust_ref = cfg.airframe.thrust_reference
     if load >= thrust_ref:
         violations.append(Violation("airframe.thrust_reference",
-                                    f"vertical load {load:.2f} N is not below the reference "
-                                    f"thrust {thrust_ref:.2f} N: the vehicle cannot carry "
+                                    f"vertical load {_n(load, 2)} N is not below the reference "
+                                    f"thrust {_n(thrust_ref, 2)} N: the vehicle cannot carry "
                                     f"its share"))
         max_tilt = 0.0
     else:
         max_tilt = math.acos(load / thrust_ref)
+    thrust_max = cfg.airframe.thrust_max
+    if load >= thrust_max:
+        violations.append(Violation("airframe.thrust_max",
+                                    f"vertical load {_n(load, 2)} N is not below the full-speed "
+                                    f"thrust {thrust_max:.3g} N (4 x thrust_coefficient x "
+                                    f"rotor_speed_max^2): the vehicle cannot lift itself and "
+                                    f"its share of the payload"))
     bank = cfg.limits.bank
     if bank >= max_tilt:
         tilt_deg = math.degrees(max_tilt)
         violations.append(Violation("limits.bank_deg",
-                                    f"bank limit {bank:.3f} rad is not below the largest tilt "
-                                    f"{max_tilt:.3f} rad that still carries {load:.2f} N: set "
+                                    f"bank limit {_n(bank)} rad is not below the largest tilt "
+                                    f"{_n(max_tilt)} rad that still carries {_n(load, 2)} N: set "
                                     f"it below {_floor3(tilt_deg)} degrees",
                                     {"limits.bank_deg": tilt_deg}))
     f_h = thrust_ref * math.sin(bank)
@@ -273,18 +303,20 @@ def analyze(team: Team) -> Analysis:
     design_span = 2.0 * l * math.sin(theta)
     t_design = rope_pull(weight_share, l, design_span)
     if design_span < 2 * r_nom:
-        warnings.append(f"the design rope angle {theta:.3f} rad is below the rope angle of the "
-                        f"nominal shape {eq_angle:.3f} rad")
+        warnings.append(f"the design rope angle {_n(theta)} rad is below the rope angle of the "
+                        f"nominal shape {_n(eq_angle)} rad")
     max_accel = (f_h - t_design) / m
     max_axis = max_accel * _AXIS_FACTOR
     if max_accel <= 0:
         violations.append(Violation("analysis.design_rope_angle_deg",
-                                    f"the rope pull {t_design:.2f} N at the design angle exceeds "
-                                    f"the horizontal force {f_h:.2f} N left at the bank limit"))
+                                    f"the rope pull {_n(t_design, 2)} N at the design angle "
+                                    f"exceeds the horizontal force {_n(f_h, 2)} N left at the "
+                                    f"bank limit"))
 
     e_max = cfg.analysis.max_distance_error
     ev_max = cfg.analysis.max_speed_error or cfg.guidance.max_speed
     basis = motion_basis(f)
+    warnings += _motion_warnings(basis.unavailable, cfg.guidance.max_rotation_disagreement)
     rot_edges = np.abs(basis.rotate).max(axis=0) > 1e-9
     worst_edge = float(f.distances[rot_edges].max() if rot_edges.any() else f.distances.max())
     worst_edge += e_max
@@ -303,13 +335,13 @@ def analyze(team: Team) -> Analysis:
     if cfg.limits.accel_norm > max_accel:
         violations.append(Violation("limits.accel_norm",
                                     f"{cfg.limits.accel_norm:g} m/s^2 exceeds the largest "
-                                    f"guidance acceleration {max_accel:.3f} m/s^2: set it to "
+                                    f"guidance acceleration {_n(max_accel)} m/s^2: set it to "
                                     f"at most {_floor3(max_accel)}",
                                     {"limits.accel_norm": max_accel}))
     if cfg.limits.accel_axis > max_axis:
         violations.append(Violation("limits.accel_axis",
                                     f"{cfg.limits.accel_axis:g} m/s^2 exceeds the per-axis "
-                                    f"limit {max_axis:.3f} m/s^2: set it to at most "
+                                    f"limit {_n(max_axis)} m/s^2: set it to at most "
                                     f"{_floor3(max_axis)}", {"limits.accel_axis": max_axis}))
 
     # Largest vehicle-payload distance that leaves the configured acceleration available.
@@ -320,8 +352,8 @@ def analyze(team: Team) -> Analysis:
                                     "the nominal shape already pulls the ropes too hard "
                                     "to leave the configured acceleration"))
     if e_max > safe_margin > 0:
-        warnings.append(f"eq. max assumes distance errors up to {e_max:.2f} m, beyond the "
-                        f"safe deformation of {safe_margin:.3f} m")
+        warnings.append(f"eq. max assumes distance errors up to {_n(e_max, 2)} m, beyond the "
+                        f"safe deformation of {_n(safe_margin)} m")
 
     return Analysis(
         team=cfg.name, vehicles=n, gravity=g, payload_share=share,
@@ -347,7 +379,7 @@ def format_report(a: Analysis, source: str) -> str:
     """Human-readable table of the analysis."""
 
     def val(x: float, unit: str, digits: int = 3) -> str:
-        return "unreachable" if not math.isfinite(x) else f"{x:.{digits}f} {unit}"
+        return "unreachable" if not math.isfinite(x) else f"{_n(x, digits)} {unit}"
 
     share = f"M g / {a.payload_share}"
     rows = [

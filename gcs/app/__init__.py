@@ -19,7 +19,7 @@ Modules:
 
 from gcs.app._app import LOOP_GIL_SWITCH_S, GcsApp
 from gcs.app._fly import FlightResult, fly
-from gcs.app._scenario import Scenario, ScenarioError, Step, load_scenario
+from gcs.app._scenario import Scenario, ScenarioError, Step, check_scenario, load_scenario
 from gcs.app._simprocess import SimProcess, SimStartError, free_tcp_port
 
 __all__ = [
@@ -31,6 +31,7 @@ __all__ = [
     "SimProcess",
     "SimStartError",
     "Step",
+    "check_scenario",
     "fly",
     "free_tcp_port",
     "load_scenario",

@@ -15,7 +15,10 @@ A step does one thing:
 * ``scale: 1.2`` or ``scale_steps: +2``; ``altitude: 1.8`` or ``altitude_steps: -1``;
 * ``wait: 3`` seconds with the sticks centred.
 
-All times are on the loop's clock (simulated seconds in a headless flight).
+All times are on the loop's clock (simulated seconds in a headless flight), each
+at most an hour. A scenario is loaded on its own (:func:`load_scenario`) and checked
+against the team it flies (:func:`check_scenario`): a scale or an altitude outside
+the team's ranges is refused, not clipped in flight.
 """
 
 from __future__ import annotations
@@ -24,10 +27,15 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from gcs.common import ConfigError, field, from_mapping, load_yaml
+from gcs.common import ConfigError, FieldError, field, from_mapping, load_yaml
+from gcs.config import Team
 from gcs.loop import Action, Clock, Phase, Runtime
 
-__all__ = ["Scenario", "ScenarioError", "Step", "Sticks", "load_scenario", "play"]
+__all__ = ["Scenario", "ScenarioError", "Step", "Sticks", "check_scenario", "load_scenario",
+           "play"]
+
+LONGEST_S = 3600.0
+"""Longest wait, stick hold or timeout of one step, s: a scenario is a test flight."""
 
 #: The phase an action is finished in.
 DONE_IN = {
@@ -62,14 +70,17 @@ class Step:
     action: str | None = field(doc="arm, takeoff, lift, set_down, land, abort, resume",
                                default=None)
     sticks: Sticks | None = field(doc="stick positions held for `duration`", default=None)
-    duration: float = field(doc="how long sticks are held, s", default=0.0, ge=0.0)
+    duration: float = field(doc="how long sticks are held, s", default=0.0, ge=0.0,
+                            le=LONGEST_S)
     scale: float | None = field(doc="shape scale", default=None, gt=0.0)
     scale_steps: int | None = field(doc="grow (+) or shrink (-) by steps", default=None)
     altitude: float | None = field(doc="altitude target above the ground, m", default=None,
                                    ge=0.0)
     altitude_steps: int | None = field(doc="raise (+) or lower (-) by steps", default=None)
-    wait: float | None = field(doc="wait with sticks centred, s", default=None, ge=0.0)
-    timeout: float = field(doc="longest wait for an action's phase, s", default=120.0, gt=0.0)
+    wait: float | None = field(doc="wait with sticks centred, s", default=None, ge=0.0,
+                               le=LONGEST_S)
+    timeout: float = field(doc="longest wait for an action's phase, s", default=120.0, gt=0.0,
+                           le=LONGEST_S)
     label: str = field(doc="name shown in progress and errors", default="")
 
     def __post_init__(self) -> None:
@@ -80,6 +91,11 @@ class Step:
         if self.action is not None and self.action not in {a.value for a in Action}:
             raise ValueError(f"action: unknown {self.action!r} (one of "
                              f"{', '.join(a.value for a in Action)})")
+        if self.sticks is not None and self.duration <= 0.0:
+            raise FieldError("duration", "sticks are held for a duration: give one above 0 s")
+        if self.sticks is None and self.duration != 0.0:
+            raise FieldError("duration", f"only a sticks step is held for a duration, this "
+                                         f"step is {kinds[0]}")
 
     def describe(self) -> str:
         if self.label:
@@ -110,6 +126,44 @@ def load_scenario(path: str | Path) -> Scenario:
             if not isinstance(step, dict):
                 raise ConfigError(str(path), f"steps[{k}]", "expected a mapping")
     return from_mapping(Scenario, raw, str(path))
+
+
+def check_scenario(scenario: Scenario, team: Team, source: str) -> None:
+    """Refuse a scenario that asks ``team`` for what its config does not allow.
+
+    A scale outside ``guidance.scale_min..scale_max`` (given, or reached by
+    ``scale_steps`` from 1) or an altitude outside
+    ``operator.altitude_min..altitude_max`` raises ConfigError naming ``source`` and
+    the step; in flight the operator command would clip it silently.
+    """
+    g, op = team.config.guidance, team.config.operator
+    scale = 1.0
+    for k, step in enumerate(scenario.steps):
+        where = f"steps[{k}]"
+        if step.scale is not None or step.scale_steps is not None:
+            given = step.scale is not None
+            if step.scale is not None:
+                scale = step.scale
+            else:
+                assert step.scale_steps is not None
+                scale = round(scale + step.scale_steps * g.scale_step, 6)
+            what = f"{scale:g}" if given else f"takes the scale to {scale:g}, which"
+            at = f"{where}.scale" if given else f"{where}.scale_steps"
+            if scale < g.scale_min - 1e-9:
+                raise ConfigError(source, at, f"{what} is below guidance.scale_min "
+                                  f"{g.scale_min:g} of {team.source}")
+            if scale > g.scale_max + 1e-9:
+                raise ConfigError(source, at, f"{what} is above guidance.scale_max "
+                                  f"{g.scale_max:g} of {team.source}")
+        elif step.altitude is not None:
+            if step.altitude < op.altitude_min:
+                raise ConfigError(source, f"{where}.altitude", f"{step.altitude:g} m is below "
+                                  f"operator.altitude_min {op.altitude_min:g} m of "
+                                  f"{team.source}")
+            if step.altitude > op.altitude_max:
+                raise ConfigError(source, f"{where}.altitude", f"{step.altitude:g} m is above "
+                                  f"operator.altitude_max {op.altitude_max:g} m of "
+                                  f"{team.source}")
 
 
 def play(scenario: Scenario, runtime: Runtime, clock: Clock, *,

@@ -20,11 +20,12 @@ from gcs.common._jit_cache import kernel
 from gcs.common._lazy import lazy_modules
 from gcs.common._shipped import LOCAL_CONFIGS, default_config, shipped_config
 from gcs.common._threads import join_thread
-from gcs.common._typed_config import ConfigError, field, from_mapping, load_yaml
+from gcs.common._typed_config import ConfigError, FieldError, field, from_mapping, load_yaml
 
 __all__ = [
     "LOCAL_CONFIGS",
     "ConfigError",
+    "FieldError",
     "default_config",
     "field",
     "from_mapping",

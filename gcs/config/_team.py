@@ -2,7 +2,11 @@
 
 A team file (``configs/*.yaml``) is loaded into a frozen :class:`TeamConfig`
 and its shape into a :class:`~gcs.formation.Formation`; every mistake is refused
-with one line naming the file, the field and what is wrong.
+with one line naming the file, the field and what is wrong: wrong types and
+values out of range, limits that contradict each other (altitude range, geofence,
+lift and take-off heights, scale step), a physically impossible team (an airframe
+that cannot hover, ropes that cannot reach, vehicles closer than their rotors) and
+signing key files that are missing or no key (docs/teams.md lists them).
 
 Vehicle positions are in the team's body frame: x forward, y right (NED-like),
 metres. Edges are ``[tail, head]`` or ``[tail, head, distance]`` by vehicle id,
@@ -27,10 +31,11 @@ from typing import Any, Literal
 
 import numpy as np
 
-from gcs.common import ConfigError, field, from_mapping, load_yaml
+from gcs.common import ConfigError, FieldError, field, from_mapping, load_yaml
 from gcs.config._links import GcsLinkConfig, LinkConfig, check_links
 from gcs.formation import Formation, FormationError, build_formation
-from vehicles import Airframe, load_airframe
+from gcs.wire import load_signing_key
+from vehicles import Airframe, check_airframe, load_airframe
 
 __all__ = [
     "AnalysisConfig",
@@ -50,6 +55,15 @@ __all__ = [
 
 STANDARD_GRAVITY = 9.80665  # m/s^2
 
+MAX_EXTENT = 1e4
+"""Largest vehicle coordinate and edge distance, m: a team flown by one GCS over its
+radio links fits in a few kilometres (and beyond this, squares of distances lose
+the precision the rigidity test needs)."""
+
+MAX_SPEED = 20.0
+"""Largest translation speed and speed error, m/s: above any rotorcraft that carries a
+payload on ropes (the Bebop 2 flies at most 16 m/s, alone)."""
+
 
 @dataclass(frozen=True)
 class VehicleSpec:
@@ -57,7 +71,8 @@ class VehicleSpec:
 
     id: int = field(doc="MAVLink system id of the vehicle", ge=1, le=254)
     position: tuple[float, float] | None = field(
-        doc="desired position in the team body frame (x forward, y right), m", default=None)
+        doc="desired position in the team body frame (x forward, y right), m", default=None,
+        ge=-MAX_EXTENT, le=MAX_EXTENT)
 
 
 @dataclass(frozen=True)
@@ -67,7 +82,7 @@ class EdgeSpec:
     tail: int = field(doc="vehicle id at the tail (z_k = p_tail - p_head)")
     head: int = field(doc="vehicle id at the head")
     distance: float | None = field(doc="desired distance, m (derived from positions if absent)",
-                                   default=None, gt=0.0)
+                                   default=None, gt=0.0, le=MAX_EXTENT)
 
 
 @dataclass(frozen=True)
@@ -76,10 +91,12 @@ class GuidanceConfig:
 
     c1: float = field(doc="velocity gain c1, 1/s", gt=0.0)
     c2: float = field(doc="distance gain c2, 1/s^2", gt=0.0)
-    rate_hz: float = field(doc="guidance rate, Hz", gt=0.0, le=100.0)
-    max_speed: float = field(doc="translation speed at full stick, m/s", gt=0.0)
+    rate_hz: float = field(doc="guidance rate, Hz (the loop's tick; 4 Hz in the paper)",
+                           ge=0.5, le=50.0)
+    max_speed: float = field(doc="translation speed at full stick, m/s", gt=0.0,
+                             le=MAX_SPEED)
     max_rotation_disagreement: float = field(
-        doc="largest rotation disagreement mu_r at full stick, m/s", ge=0.0)
+        doc="largest rotation disagreement mu_r at full stick, m/s", ge=0.0, le=MAX_SPEED)
     setpoint_rate_hz: float = field(
         doc="setpoints per second to each vehicle: the latest guidance output is re-sent "
             "between ticks, so one late tick does not trip the autopilot's setpoint timeout "
@@ -127,7 +144,8 @@ class PayloadConfig:
     """The suspended payload and its ropes."""
 
     mass: float = field(doc="payload mass M, kg", gt=0.0)
-    rope_length: float = field(doc="rope length l (same for every vehicle), m", gt=0.0)
+    rope_length: float = field(doc="rope length l (same for every vehicle), m", gt=0.0,
+                               le=100.0)
 
 
 @dataclass(frozen=True)
@@ -141,12 +159,12 @@ class AnalysisConfig:
         gt=0.0, lt=90.0)
     max_speed_error: float | None = field(
         doc="worst speed error ||e_v|| in eq. max, m/s (default: guidance.max_speed)",
-        default=None, gt=0.0)
+        default=None, gt=0.0, le=MAX_SPEED)
     payload_share: int | None = field(
         doc="a vehicle may carry 1/share of the payload weight (default: vehicles - 1)",
         default=None, ge=1)
     gravity: float = field(doc="gravitational acceleration, m/s^2", default=STANDARD_GRAVITY,
-                           gt=0.0)
+                           gt=0.0, le=30.0)
 
 
 @dataclass(frozen=True)
@@ -168,6 +186,16 @@ class OperatorConfig:
                                  gt=0.0)
     scale_rate: float = field(doc="largest rate of change of the shape's scale, 1/s",
                               default=0.05, gt=0.0)
+
+    def __post_init__(self) -> None:
+        if self.altitude_min >= self.altitude_max:
+            raise FieldError("altitude_min", f"{self.altitude_min:g} m is at or above "
+                             f"operator.altitude_max ({self.altitude_max:g} m): no altitude "
+                             f"is left to fly at")
+        if self.altitude_step > self.altitude_max - self.altitude_min:
+            raise FieldError("altitude_step", f"{self.altitude_step:g} m is wider than the "
+                             f"whole altitude range operator.altitude_min..altitude_max "
+                             f"[{self.altitude_min:g}, {self.altitude_max:g}] m")
 
 
 @dataclass(frozen=True)
@@ -204,6 +232,9 @@ class SafetyConfig:
         if self.geofence_margin >= self.geofence_xy:
             raise ValueError(f"safety.geofence_margin ({self.geofence_margin:g} m) must be "
                              f"smaller than safety.geofence_xy ({self.geofence_xy:g} m)")
+        if self.geofence_margin >= self.geofence_altitude:
+            raise FieldError("geofence_margin", f"{self.geofence_margin:g} m is not below "
+                             f"safety.geofence_altitude ({self.geofence_altitude:g} m)")
 
 
 @dataclass(frozen=True)
@@ -283,6 +314,9 @@ def _normalise(raw: Any, path: Path) -> Any:
     frame = raw.get("airframe")
     if isinstance(frame, str):
         frame_path = (path.parent / frame).resolve()
+        if frame_path.is_dir():
+            raise ConfigError(str(path), "airframe", f"{frame} is a directory, not an "
+                                                     f"airframe file")
         if not frame_path.is_file():
             raise ConfigError(str(path), "airframe", f"file not found: {frame}")
         raw["airframe"] = load_airframe(frame_path)
@@ -292,7 +326,10 @@ def _normalise(raw: Any, path: Path) -> Any:
 def load_team(path: str | Path) -> Team:
     """Load and validate a team file; raises ConfigError (one line) on any mistake."""
     path = Path(path)
-    cfg = from_mapping(TeamConfig, _normalise(load_yaml(path), path), str(path))
+    raw = _normalise(load_yaml(path), path)
+    cfg = from_mapping(TeamConfig, raw, str(path))
+    if not isinstance(raw.get("airframe"), Airframe):  # given inline: checked here
+        check_airframe(cfg.airframe, str(path), "airframe")
     ids = [v.id for v in cfg.vehicles]
     have_pos = [v.position is not None for v in cfg.vehicles]
     if any(have_pos) and not all(have_pos):
@@ -325,5 +362,90 @@ def load_team(path: str | Path) -> Team:
         raise ConfigError(str(path), "limits.accel_axis",
                           f"{cfg.limits.accel_axis:g} m/s^2 exceeds limits.accel_norm "
                           f"{cfg.limits.accel_norm:g} m/s^2")
+    g = cfg.guidance
+    if g.scale_step > g.scale_max - g.scale_min:  # here: the GCS may lower scale_max later
+        raise ConfigError(str(path), "guidance.scale_step",
+                          f"{g.scale_step:g} is wider than the whole scale range "
+                          f"guidance.scale_min..scale_max [{g.scale_min:g}, {g.scale_max:g}]")
+    _check_heights(cfg, formation, str(path))
+    _check_room(cfg, formation, str(path))
+    _check_signing_keys(cfg, path)
     return Team(config=cfg, formation=formation, source=str(path))
+
+
+def _taut_altitude(cfg: TeamConfig, formation: Formation, scale: float) -> float:
+    """Vehicle altitude at which the ropes become taut, payload on the ground (as the loop's
+    ``Runtime.taut_altitude``), m."""
+    r = scale * float(formation.radii.max())
+    return math.sqrt(max(cfg.payload.rope_length**2 - r**2, 0.0))
+
+
+def _check_heights(cfg: TeamConfig, formation: Formation, source: str) -> None:
+    """Refuse altitude limits that contradict each other or the flight phases' heights."""
+    op, fl, safety = cfg.operator, cfg.flight, cfg.safety
+    radius = float(formation.radii.max())
+    if cfg.payload.rope_length <= radius:
+        raise ConfigError(source, "payload.rope_length",
+                          f"ropes of {cfg.payload.rope_length:g} m cannot reach the payload "
+                          f"under the centroid from {radius:.4g} m away")
+    if op.altitude_max > safety.geofence_altitude:
+        raise ConfigError(source, "operator.altitude_max",
+                          f"{op.altitude_max:g} m is above safety.geofence_altitude "
+                          f"({safety.geofence_altitude:g} m): the operator could fly the "
+                          f"team out of its geofence")
+    taut = _taut_altitude(cfg, formation, 1.0)
+    if taut - fl.takeoff_slack <= 0.0:
+        raise ConfigError(source, "flight.takeoff_slack",
+                          f"{fl.takeoff_slack:g} m below the taut-rope altitude "
+                          f"{taut:.3g} m puts the take-off altitude at or below the ground")
+    if op.altitude_min > taut:
+        raise ConfigError(source, "operator.altitude_min",
+                          f"{op.altitude_min:g} m is above the taut-rope altitude "
+                          f"{taut:.3g} m: the payload could never be set down")
+    top = _taut_altitude(cfg, formation, cfg.guidance.scale_min)
+    if top + fl.lift_height > op.altitude_max:
+        raise ConfigError(source, "flight.lift_height",
+                          f"lifting {fl.lift_height:g} m above the taut-rope altitude "
+                          f"{top:.3g} m (at guidance.scale_min {cfg.guidance.scale_min:g}) "
+                          f"climbs above operator.altitude_max ({op.altitude_max:g} m)")
+
+
+def _check_room(cfg: TeamConfig, formation: Formation, source: str) -> None:
+    """Refuse a geofence the team cannot fit in, and vehicles closer than their rotors."""
+    g, safety = cfg.guidance, cfg.safety
+    reach = g.scale_max * float(formation.radii.max())
+    if reach + safety.geofence_margin >= safety.geofence_xy:
+        raise ConfigError(source, "safety.geofence_xy",
+                          f"{safety.geofence_xy:g} m leaves no room for the team at "
+                          f"guidance.scale_max {g.scale_max:g} ({reach:.3g} m from its centre "
+                          f"to a vehicle) inside safety.geofence_margin "
+                          f"{safety.geofence_margin:g} m")
+    p = formation.positions
+    gaps = np.linalg.norm(p[:, None, :] - p[None, :, :], axis=2)
+    gaps[np.diag_indices(len(p))] = np.inf
+    i, j = np.unravel_index(int(np.argmin(gaps)), gaps.shape)
+    span = 2.0 * math.hypot(cfg.airframe.arm_x, cfg.airframe.arm_y)
+    closest = float(gaps[i, j])
+    if closest * g.scale_min < span:
+        at = "vehicles" if closest < span else "guidance.scale_min"
+        ids = formation.ids
+        raise ConfigError(source, at,
+                          f"vehicles {ids[i]} and {ids[j]} are {closest:.3g} m apart at "
+                          f"scale 1 and {closest * g.scale_min:.3g} m at guidance.scale_min "
+                          f"{g.scale_min:g}: closer than twice the airframe's rotor offset "
+                          f"hypot(arm_x, arm_y) ({span:.3g} m), they would collide")
+
+
+def _check_signing_keys(cfg: TeamConfig, path: Path) -> None:
+    """Every signing key the links name exists and is a key: refused here, not when the
+    simulator or a link first reads it."""
+    for k, link in enumerate(cfg.links or ()):
+        key_path = link.signing_key_path(path.parent)
+        if key_path is None:
+            continue
+        try:
+            load_signing_key(key_path)
+        except ConfigError as exc:
+            raise ConfigError(str(path), f"links[{k}].signing_key",
+                              f"{link.signing_key}: {exc.what}") from None
 

@@ -5,11 +5,17 @@ desired velocity in steady state is a linear combination of the unit vectors of
 its *own* edges, ``v*_i = sum_k A_v[i, k] zhat_k``; the coefficients are the
 disagreements mu. For any rigid team we solve, per vehicle and per motion, the
 least-norm combination that reproduces the rigid-body velocity field at the
-desired shape (the incident edges of a vertex of an infinitesimally rigid
-framework always span the plane, so a solution exists):
+desired shape (with three vehicles or more, the incident edges of a vertex of an
+infinitesimally rigid framework always span the plane, so a solution exists):
 
 * translation along the team's body x and along its body y (per 1 m/s),
 * rotation about the centroid (per 1 rad/s).
+
+A pair (two vehicles, one edge: rigid, but each vehicle has a single edge) can
+only move along its edge: a motion some vehicle cannot make on its own edges is
+left out (all zero) and named in :attr:`MotionBasis.unavailable`, rather than
+flown in part (a pair across the team's x axis would otherwise drift along its
+edge on a forward stick).
 
 The centripetal term is Proposition 1's ``A_a = A_v D_(1/d) B^T A_v`` (the
 derivative of ``v*`` along the rigid motion; with rotation alone it is the
@@ -58,7 +64,11 @@ def local_pseudoinverse(formation: Formation) -> np.ndarray:
     P = np.zeros((f.n, f.slot_mask.shape[1], 2))
     for i in range(f.n):
         Q = qhat[i].T  # (2, S)
-        P[i] = Q.T @ np.linalg.inv(Q @ Q.T)
+        gram = Q @ Q.T
+        if np.linalg.cond(gram) < 1e12:
+            P[i] = Q.T @ np.linalg.inv(gram)
+        else:  # one edge direction (a pair): least squares along it
+            P[i] = np.linalg.pinv(Q, rcond=1e-9)
     return P
 
 
@@ -96,10 +106,13 @@ class MotionBasis:
     translate_y: np.ndarray
     rotate: np.ndarray
     pinv: np.ndarray
+    unavailable: tuple[str, ...] = ()
+    """Motions the team cannot make (their matrices are zero): ``translate_x``,
+    ``translate_y``, ``rotate``; empty for three vehicles or more."""
 
     @functools.cached_property
     def rotate_mu_max(self) -> float:
-        """Largest rotation disagreement per rad/s at scale 1, m/s per rad/s."""
+        """Largest rotation disagreement per rad/s at scale 1, m/s per rad/s (0: no spin)."""
         return float(np.abs(self.rotate).max())
 
     @functools.cached_property
@@ -109,7 +122,10 @@ class MotionBasis:
         return z / np.linalg.norm(z, axis=1, keepdims=True)
 
     def angular_rate(self, mu_rotation: float, scale: float) -> float:
-        """Angular rate (rad/s) produced when the largest rotation disagreement is ``mu``."""
+        """Angular rate (rad/s) produced when the largest rotation disagreement is ``mu``
+        (0 for a team that cannot spin)."""
+        if self.rotate_mu_max == 0.0:
+            return 0.0
         return mu_rotation / (self.rotate_mu_max * scale)
 
     def velocity_matrix(self, vx: float, vy: float, omega: float, scale: float) -> np.ndarray:
@@ -148,5 +164,15 @@ def motion_basis(formation: Formation) -> MotionBasis:
         # omega x r about NED down, in the horizontal plane: (-r_y, r_x)
         "rotate": np.column_stack((-f.positions[:, 1], f.positions[:, 0])),
     }
-    mats = {name: _slots_to_edges(f, np.einsum("isk,ik->is", P, v)) for name, v in fields.items()}
-    return MotionBasis(formation=f, pinv=P, **mats)
+    z = f.relative(f.positions)
+    zhat = z / np.linalg.norm(z, axis=1, keepdims=True)
+    mats: dict[str, np.ndarray] = {}
+    unavailable: list[str] = []
+    for name, v in fields.items():
+        A = _slots_to_edges(f, np.einsum("isk,ik->is", P, v))
+        scale = max(float(np.abs(v).max()), 1e-12)
+        if np.abs(A @ zhat - v).max() > 1e-9 * scale:  # some vehicle cannot make it
+            A = np.zeros_like(A)
+            unavailable.append(name)
+        mats[name] = A
+    return MotionBasis(formation=f, pinv=P, unavailable=tuple(unavailable), **mats)
