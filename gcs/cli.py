@@ -135,6 +135,8 @@ def _cmd_report(args: argparse.Namespace) -> int:
         damage = log.index.damage()
         if damage is not None:
             print(f"note: {damage}")
+        if summary["cut_short"]:
+            print(f"note: {summary['cut_short']}")
     return 0
 
 

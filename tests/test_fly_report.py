@@ -87,6 +87,11 @@ def test_report_matches_the_flight(short_flight: tuple[dict, Path], tmp_path: Pa
     assert summary["link_losses"] == {"1/1": 0, "2/1": 0, "3/1": 0, "4/1": 0}
 
 
+def test_a_whole_flight_is_not_cut_short(short_flight: tuple[dict, Path]) -> None:
+    _, log = short_flight
+    assert FlightLog.load(log).cut_short() is None
+
+
 def test_truncated_log_still_reports(short_flight: tuple[dict, Path], tmp_path: Path) -> None:
     _, log = short_flight
     cut = tmp_path / "cut.tlog"
@@ -109,6 +114,11 @@ def test_truncated_log_still_reports(short_flight: tuple[dict, Path], tmp_path: 
     assert summary["truncated"] and summary["damage"] == parsed.index.damage()
     md = (tmp_path / "r" / "summary.md").read_text()
     assert f"Damaged log: {parsed.index.damage()}" in md
+    # the half it holds ends in the air: said, not passed off as a complete flight
+    assert summary["cut_short"].startswith("cut short: the record ends in phase ")
+    assert summary["cut_short"].endswith(", with no landing")
+    assert f"note: {summary['cut_short']}" in out.stdout
+    assert f"**This flight was {summary['cut_short']}**" in md
 
 
 def test_corrupt_log_still_reports_and_says_what_was_skipped(

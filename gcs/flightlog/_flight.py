@@ -240,6 +240,21 @@ class FlightLog:
             out[:, :width] = a[:, :width]
         return out.reshape(len(self.tick_t), n, columns)
 
+    def cut_short(self) -> str | None:
+        """Why the flight's record ends with the team possibly in the air (the GCS was
+        stopped or killed, the log cut), or None when it ends on the ground.
+
+        A complete flight ends landed, or never took off; a log of the GCS whose last
+        phase is an airborne one did not see the team come down.
+        """
+        if not len(self.phase):
+            return None
+        last = Phase(int(self.phase[-1]))
+        if not last.airborne:
+            return None
+        return (f"cut short: the record ends in phase {last.text} at "
+                f"t = {float(self.tick_t[-1] - self.tick_t[0]):.1f} s, with no landing")
+
     def phase_changes(self) -> list[tuple[float, str]]:
         """(time, phase name) at each change of phase."""
         out = []

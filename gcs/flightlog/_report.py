@@ -276,6 +276,7 @@ def _summary(log: FlightLog, figures: list[str]) -> dict[str, Any]:
         "bad_timestamps_rejected": log.index.rejected_times,
         "truncated": log.index.truncated,
         "damage": log.index.damage(),
+        "cut_short": log.cut_short(),
         "vehicles": sorted(log.tracks),
         "metrics": metrics,
         "link_losses": {f"{s}/{c}": n for (s, c), n in sorted(log.link_losses().items())},
@@ -290,6 +291,9 @@ def _summary(log: FlightLog, figures: list[str]) -> dict[str, Any]:
 def _markdown(s: dict[str, Any]) -> str:
     m = s["metrics"] or {}
     lines = [f"# Flight report: {Path(str(s['log'])).name}", ""]
+    if s["cut_short"]:
+        lines += [f"**This flight was {s['cut_short']}** (the GCS stopped or was killed, "
+                  "or the log was cut): the figures cover only what was recorded.", ""]
     if m:
         lines += ["| metric | value |", "|---|---|"]
         for key in ("duration_s", "worst_distance_error_m", "payload_lift_m", "worst_swing_rad",
