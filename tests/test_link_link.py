@@ -114,6 +114,18 @@ def test_attitude_euler_fills_quaternion(rig: Rig) -> None:
     assert t.attitude is not None and t.attitude.rpy == pytest.approx((0.1, -0.2, 0.3))
 
 
+def test_telemetry_with_impossible_values_is_refused_and_counted(rig: Rig) -> None:
+    """An ATTITUDE with infinite angles printed tracebacks; now it is refused, counted in the
+    link's health (the page's "refused" column), and the good telemetry goes on."""
+    inf = float("inf")
+    rig.send(rig.encode(rig.vehicle.mav.attitude_encode(10, inf, 0.0, inf, 0, 0, 0)))
+    rig.until(lambda: rig.link.health.refused_values == 1, "1 refused")
+    assert rig.link.telemetry.attitude is None and rig.link.health.refused == 1
+    rig.send(rig.encode(rig.vehicle.mav.attitude_encode(11, 0.1, 0.0, 0.2, 0, 0, 0)))
+    t = rig.wait(lambda t: t.attitude is not None, "attitude")
+    assert t.attitude is not None and t.attitude.rpy == pytest.approx((0.1, 0.0, 0.2))
+
+
 def test_frames_from_other_systems_are_counted_and_ignored(rig: Rig) -> None:
     stranger = MavlinkEncoder(system_id=7, component_id=1)
     rig.send(*[stranger.encode(stranger.mav.local_position_ned_encode(0, 9, 9, 9, 0, 0, 0))

@@ -41,11 +41,14 @@ class LinkHealth:
     """Frames cut short."""
     rtt_s: float | None
     """Latest round-trip time (COMMAND_ACK or TIMESYNC), s."""
+    refused_values: int = 0
+    """Telemetry messages from the vehicle refused for their values (NaN, inf, huge)."""
 
     @property
     def refused(self) -> int:
-        """All refused frames."""
-        return self.refused_bad_crc + self.refused_signature + self.refused_wrong_system
+        """All refused frames and messages (the page's "refused" column)."""
+        return (self.refused_bad_crc + self.refused_signature + self.refused_wrong_system
+                + self.refused_values)
 
     @property
     def loss_ratio(self) -> float:

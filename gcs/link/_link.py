@@ -232,7 +232,8 @@ class Link:
                 refused_signature=stats.refused_signature,
                 refused_wrong_system=self._wrong_system,
                 foreign_systems=tuple(sorted(self._foreign)),
-                garbage_bytes=stats.garbage_bytes, truncated=stats.truncated, rtt_s=self._rtt_s)
+                garbage_bytes=stats.garbage_bytes, truncated=stats.truncated, rtt_s=self._rtt_s,
+                refused_values=self._store.refused)
 
     def decode_stats(self) -> DecodeStats:
         """The decoder's raw counters."""
