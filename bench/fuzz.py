@@ -54,6 +54,8 @@ import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 
+from gcs.testing import field_layout, raw_frame
+
 __all__ = ["ENTRY_POINTS", "main"]
 
 _CLOCK_SPECIALS = (math.nan, math.inf, -math.inf, -0.0, 0.0, 5e-324, 1.7976931348623157e308,
@@ -213,37 +215,6 @@ def truth_input(rng: random.Random) -> bytes:
     return random_bytes(rng, 600)
 
 
-def frame(msgid: int, payload: bytes, *, sysid: int = 245, compid: int = 190, seq: int = 0,
-          incompat: int = 0) -> bytes:
-    """A MAVLink 2 frame of ``msgid`` around ``payload`` with a good checksum (any payload)."""
-    from gcs.wire import frame_crc, mavlink
-
-    cls = mavlink.mavlink_map.get(msgid)
-    header = bytes((0xFD, len(payload), incompat, 0, seq & 0xFF, sysid, compid,
-                    msgid & 0xFF, (msgid >> 8) & 0xFF, msgid >> 16))
-    crc = frame_crc(header[1:] + payload, cls.crc_extra if cls is not None else 0)
-    return header + payload + struct.pack("<H", crc)
-
-
-def layout(msgid: int) -> list[tuple[str, int, str, int]]:
-    """(field, offset, struct code, count) of each field of a message type, in wire order."""
-    from gcs.wire import mavlink
-
-    cls = mavlink.mavlink_map[msgid]
-    out = []
-    offset, count = 0, ""
-    names = iter(cls.ordered_fieldnames)
-    for code in cls.unpacker.format.lstrip("<"):
-        if code.isdigit():
-            count += code
-            continue
-        n = int(count or "1")
-        count = ""
-        out.append((next(names), offset, code, n))
-        offset += struct.calcsize("<" + code) * n
-    return out
-
-
 _SPECIAL_FLOATS = (math.nan, math.inf, -math.inf, 3.4e38, -3.4e38, 1e-45, 0.0, 1.0, -1.0, 1e7)
 
 
@@ -253,7 +224,7 @@ def field_payload(rng: random.Random, msgid: int, target: int = 0) -> bytes:
     from gcs.wire import mavlink
 
     out = bytearray(rng.randbytes(mavlink.mavlink_map[msgid].unpacker.size))
-    for name, offset, code, n in layout(msgid):
+    for name, offset, code, n in field_layout(msgid):
         if code in "fd" and rng.random() < 0.3:  # random bytes rarely make these
             for k in range(n):
                 struct.pack_into("<" + code, out, offset + k * struct.calcsize(code),
@@ -275,7 +246,7 @@ def frames_input(rng: random.Random, msgids: list[int], target: int = 0) -> byte
     parts = []
     for _ in range(rng.randrange(1, 4)):
         msgid = rng.choice(msgids)
-        f = frame(msgid, field_payload(rng, msgid, target), seq=rng.randrange(256))
+        f = raw_frame(msgid, field_payload(rng, msgid, target), seq=rng.randrange(256))
         if pick == 1:
             f = mutate(rng, f)
         elif pick == 2:
@@ -414,7 +385,7 @@ def _endpoint(rng: random.Random, tally: Tally) -> Callable[[], None]:
             payload = bytearray(field_payload(rng, mavlink.MAVLINK_MSG_ID_COMMAND_LONG)
                                 .ljust(33, b"\x00"))
             struct.pack_into("<HBB", payload, 28, rng.choice(commands), 1, 1)
-            data = frame(mavlink.MAVLINK_MSG_ID_COMMAND_LONG, bytes(payload))
+            data = raw_frame(mavlink.MAVLINK_MSG_ID_COMMAND_LONG, bytes(payload))
         before = endpoint.counters()
         endpoint.receive(data, state["t"])
         after = endpoint.counters()
@@ -446,7 +417,7 @@ def _telemetry(rng: random.Random, tally: Tally) -> Callable[[], None]:
 
     def one() -> None:
         msgid = rng.choice(telemetry) if rng.random() < 0.8 else rng.choice(every)
-        data = frame(msgid, field_payload(rng, msgid), sysid=1, compid=1)
+        data = raw_frame(msgid, field_payload(rng, msgid), sysid=1, compid=1)
         for msg in decoder.feed(data):
             refused = store.refused
             record = store.update(msg, 1.0)

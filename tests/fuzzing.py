@@ -21,8 +21,8 @@ import pytest
 from hypothesis import HealthCheck, settings
 from hypothesis import strategies as st
 
+from gcs.testing import field_layout, raw_frame
 from gcs.wire import mavlink
-from gcs.wire._crc import frame_crc
 
 MAX_INPUT_S = 1.0
 """An input that takes longer than this is a hang."""
@@ -146,32 +146,6 @@ mutations = st.binary(min_size=3, max_size=12)
 """Operations for :func:`mutate`: ``st.builds(mutate, real_inputs, mutations)``."""
 
 
-def frame(msgid: int, payload: bytes, *, sysid: int = 245, compid: int = 190,
-          seq: int = 0) -> bytes:
-    """A MAVLink 2 frame of ``msgid`` around any ``payload``, with a good checksum."""
-    cls = mavlink.mavlink_map.get(msgid)
-    header = bytes((0xFD, len(payload), 0, 0, seq, sysid, compid, msgid & 0xFF,
-                    (msgid >> 8) & 0xFF, msgid >> 16))
-    crc = frame_crc(header[1:] + payload, cls.crc_extra if cls is not None else 0)
-    return header + payload + struct.pack("<H", crc)
-
-
-def layout(msgid: int) -> list[tuple[str, int, str, int]]:
-    """(field, offset, struct code, count) of a message type's fields, in wire order."""
-    cls = mavlink.mavlink_map[msgid]
-    out, offset, count = [], 0, ""
-    names = iter(cls.ordered_fieldnames)
-    for code in cls.unpacker.format.lstrip("<"):
-        if code.isdigit():
-            count += code
-            continue
-        n = int(count or "1")
-        count = ""
-        out.append((next(names), offset, code, n))
-        offset += struct.calcsize("<" + code) * n
-    return out
-
-
 _F64 = (math.nan, math.inf, -math.inf, 1.7976931348623157e308, -1e300, 5e-324, 0.0, -0.0, 1.0,
         -1.0, 1e7, 0.25)
 _F32 = (math.nan, math.inf, -math.inf, 3.4e38, -3.4e38, 1e-45, 0.0, -0.0, 1.0, -1.0, 1e7, 0.25)
@@ -185,7 +159,7 @@ def payload_from_bytes(msgid: int, raw: bytes, choices: bytes,
     component 1, or broadcast) and trims trailing zeros as MAVLink 2 does."""
     size = mavlink.mavlink_map[msgid].unpacker.size
     out = bytearray(raw[:size].ljust(size, b"\x00"))
-    fields = layout(msgid)
+    fields = field_layout(msgid)
     choices = choices.ljust(len(fields) + 1, b"\xff")
     for (name, offset, code, n), c in zip(fields, choices, strict=False):
         if code in "fd" and c < 96:
@@ -208,8 +182,8 @@ def payloads(msgid: int, target: int | None = None) -> st.SearchStrategy[bytes]:
     size = mavlink.mavlink_map[msgid].unpacker.size
     return st.builds(lambda raw, choices: payload_from_bytes(msgid, raw, choices, target),
                      st.binary(min_size=size, max_size=size),
-                     st.binary(min_size=len(layout(msgid)) + 1,
-                               max_size=len(layout(msgid)) + 1))
+                     st.binary(min_size=len(field_layout(msgid)) + 1,
+                               max_size=len(field_layout(msgid)) + 1))
 
 
 def datagram_from_bytes(msgids: list[int], target: int | None, data: bytes) -> bytes:
@@ -226,10 +200,10 @@ def datagram_from_bytes(msgids: list[int], target: int | None, data: bytes) -> b
     for _ in range(count):
         msgid = msgids[int.from_bytes(rest[:2].ljust(2, b"\x00"), "little") % len(msgids)]
         size = mavlink.mavlink_map[msgid].unpacker.size
-        n_choices = len(layout(msgid)) + 1
+        n_choices = len(field_layout(msgid)) + 1
         payload = payload_from_bytes(msgid, rest[3:3 + size], rest[3 + size:3 + size + n_choices],
                                      target)
-        parts.append(frame(msgid, payload, seq=rest[2] if len(rest) > 2 else 0))
+        parts.append(raw_frame(msgid, payload, seq=rest[2] if len(rest) > 2 else 0))
         rest = rest[3 + size + n_choices:]
     out = b"".join(parts)
     if kind == 2:

@@ -20,6 +20,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from gcs.testing import field_layout, raw_frame
 from gcs.wire import DecodeStats, FrameDecoder, MavlinkEncoder, SigningKey, mavlink
 from sim import (
     DEFAULT_AIRFRAME,
@@ -33,9 +34,7 @@ from tests.fuzzing import (
     assert_quiet,
     batches,
     datagrams,
-    frame,
     fuzz_settings,
-    layout,
     payloads,
     timed,
 )
@@ -122,11 +121,11 @@ def commands(draw: st.DrawFn) -> bytes:
     """A COMMAND_LONG the vehicle knows, to it, with arbitrary parameters."""
     payload = bytearray(draw(payloads(mavlink.MAVLINK_MSG_ID_COMMAND_LONG)).ljust(33, b"\0"))
     payload[28:32] = draw(st.sampled_from(COMMANDS)).to_bytes(2, "little") + bytes((1, 1))
-    return frame(mavlink.MAVLINK_MSG_ID_COMMAND_LONG, bytes(payload))
+    return raw_frame(mavlink.MAVLINK_MSG_ID_COMMAND_LONG, bytes(payload))
 
 
 _SETPOINT = mavlink.MAVLINK_MSG_ID_SET_POSITION_TARGET_LOCAL_NED
-_FIELDS = {name: (offset, code) for name, offset, code, _ in layout(_SETPOINT)}
+_FIELDS = {name: (offset, code) for name, offset, code, _ in field_layout(_SETPOINT)}
 
 
 @st.composite
@@ -142,7 +141,7 @@ def setpoints(draw: st.DrawFn) -> bytes:
                      draw(st.sampled_from([3387, 3135, 3387 | 512, 0, 0xFFFF])))
     payload[_FIELDS["coordinate_frame"][0]] = draw(st.sampled_from([1, 1, 1, 8]))
     payload[_FIELDS["target_system"][0]], payload[_FIELDS["target_component"][0]] = 1, 1
-    return frame(_SETPOINT, bytes(payload))
+    return raw_frame(_SETPOINT, bytes(payload))
 
 
 def test_a_vehicle_endpoint_never_raises_and_counts_what_it_refuses(
