@@ -19,6 +19,7 @@ import pytest
 
 from gcs.flightlog import FlightLog, TlogIndex
 from gcs.flightlog import _report as report
+from gcs.flightlog._figstyle import FORMATS
 from gcs.flightlog._report import FIGURES
 from gcs.wire import SAFETY_ARMED
 from tests.conftest import SHORT, SQUARE, run_gcs
@@ -68,7 +69,7 @@ def test_report_matches_the_flight(short_flight: tuple[dict, Path], tmp_path: Pa
     out = run_gcs("report", str(log), "--out", str(tmp_path), "--json", "--quiet")
     assert out.returncode == 0, out.stderr
     summary = json.loads(out.stdout)
-    assert summary["figures"] == list(FIGURES)
+    assert summary["figures"] == _files(FIGURES)
     _figures_drawn(tmp_path, FIGURES)
     r = summary["metrics"]
     for key in ("worst_distance_error_m", "payload_lift_m", "worst_swing_rad",
@@ -105,7 +106,7 @@ def test_truncated_log_still_reports(short_flight: tuple[dict, Path], tmp_path: 
     parsed = FlightLog.load(cut)
     assert parsed.index.truncated and len(parsed.tick_t) > 10
     summary = json.loads((tmp_path / "r" / "summary.json").read_text())
-    assert summary["figures"] == list(FIGURES)  # the half it holds, drawn
+    assert summary["figures"] == _files(FIGURES)  # the half it holds, drawn
     _figures_drawn(tmp_path / "r", FIGURES)
     r = summary["metrics"]
     assert r["ticks"] == len(parsed.tick_t)
@@ -148,12 +149,16 @@ def test_corrupt_log_still_reports_and_says_what_was_skipped(
     assert "corrupt bytes skipped=" in text and "damaged timestamp rejected=" in text
 
 
-def _figures_drawn(folder: Path, names: tuple[str, ...]) -> None:
-    """Each figure is a real PNG with something drawn in it (not a blank canvas)."""
-    for name in names:
-        image = plt.imread(folder / name)
-        assert image.shape[0] > 300 and image.shape[1] > 300, name
-        assert image[..., :3].std() > 0.05, name
+def _files(stems: tuple[str, ...]) -> list[str]:
+    return [f"{stem}.{ext}" for stem in stems for ext in FORMATS]
+
+
+def _figures_drawn(folder: Path, stems: tuple[str, ...]) -> None:
+    """Each figure's PNG is real, with something drawn in it (not a blank canvas)."""
+    for stem in stems:
+        image = plt.imread(folder / f"{stem}.png")
+        assert image.shape[0] > 300 and image.shape[1] > 300, stem
+        assert image[..., :3].std() > 0.05, stem
 
 
 def test_plain_autopilot_log_reports_what_its_telemetry_gives(
@@ -190,8 +195,8 @@ def test_plain_autopilot_log_reports_what_its_telemetry_gives(
     assert r["ticks"] == 0 and r["phases"] == [] and r["worst_distance_error_by_phase_m"] == {}
     assert any("per-phase distance errors, payload swing or commanded accelerations" in x
                for x in summary["missing"])
-    assert summary["figures"] == ["formation.png", "trajectories.png"]
-    _figures_drawn(tmp_path / "r", ("formation.png", "trajectories.png"))
+    assert summary["figures"] == _files(("formation", "trajectories"))
+    _figures_drawn(tmp_path / "r", ("formation", "trajectories"))
     md = (tmp_path / "r" / "summary.md").read_text()
     assert f"| duration_s | {r['duration_s']} |" in md
     assert f"| worst_bank_rad | {r['worst_bank_rad']} |" in md
@@ -202,7 +207,7 @@ def test_plain_autopilot_log_reports_what_its_telemetry_gives(
     fig = report._formation(log)
     assert fig is not None
     lines = fig.axes[0].get_lines()
-    assert sorted(line.get_label() for line in lines) == ["1-2", "1-3", "1-4", "2-3", "2-4",
+    assert sorted(str(line.get_label()) for line in lines) == ["1-2", "1-3", "1-4", "2-3", "2-4",
                                                           "3-4"]
     positions = [x for x in raw if x.get_type() == "LOCAL_POSITION_NED"]
     t0 = min(x._timestamp for x in positions)
@@ -217,21 +222,47 @@ def test_plain_autopilot_log_reports_what_its_telemetry_gives(
     plt.close(fig)
 
 
-def test_acceleration_limits_are_drawn_against_their_own_quantity(
-        short_flight: tuple[dict, Path]) -> None:
-    log = FlightLog.load(short_flight[1])
-    fig = report._accelerations(log)
-    assert fig is not None and log.team is not None
-    norm_ax, axis_ax = fig.axes
+def test_summary_lists_the_events_one_line_per_condition(
+        short_flight: tuple[dict, Path], tmp_path: Path) -> None:
+    """Four vehicles switching mode together are one line with its count, not four."""
+    _, log = short_flight
+    out = run_gcs("report", str(log), "--out", str(tmp_path), "--quiet")
+    assert out.returncode == 0, out.stderr
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    md = (tmp_path / "summary.md").read_text()
+    events = md[md.index("\n## Events\n"):]
+    assert "| first [s] | level | count | vehicles | event |" in events
+    hold = next(line for line in summary["event_lines"] if line["text"] == "mode HOLD (was "
+                "DISARMED)")
+    assert hold["count"] == 4 and hold["vehicles"] == [1, 2, 3, 4] and hold["level"] == "info"
+    first = min(e["t_s"] for e in summary["events"] if e["text"].endswith(": mode HOLD (was "
+                                                                          "DISARMED)"))
+    assert hold["first_s"] == first
+    assert f"| {first} | info | 4 | 1–4 | mode HOLD (was DISARMED) |" in events
+    # every logged text but the phase changes (listed apart) is counted once
+    logged = [e for e in summary["events"] if not e["text"].startswith("phase: ")]
+    assert sum(line["count"] for line in summary["event_lines"]) == len(logged)
+    assert len(summary["event_lines"]) < len(logged) // 3
+    assert "## Phases" in md and "formation at " in md
 
-    def levels(ax: plt.Axes) -> set[float]:  # horizontal lines: y constant over the line
-        return {round(float(y[0]), 6) for line in ax.get_lines()
-                if len(y := np.asarray(line.get_ydata(), dtype=float)) == 2 and y[0] == y[1]}
 
-    norm, per_axis = float(log.team["accel_norm"]), float(log.team["accel_axis"])
-    assert levels(norm_ax) == {round(norm, 6)}
-    assert levels(axis_ax) == {round(per_axis, 6), round(-per_axis, 6)}
-    plt.close(fig)
+def test_an_event_storm_is_one_line_per_condition() -> None:
+    """Stale telemetry on four vehicles at each of three phase changes, with different
+    ages, is one line of twelve; a vehicle's own text counts for that vehicle."""
+    from gcs.flightlog import event_lines
+    from gcs.flightlog._events import id_ranges
+
+    storm = [(100.0 + k + 0.01 * v, 245, 4, f"vehicle {v}: no fresh telemetry for "
+              f"{0.5 + 0.1 * k + 0.01 * v:.2f} s: motion frozen")
+             for k in range(3) for v in (1, 2, 3, 4)]
+    texts = [(99.0, 245, 6, "phase: lifting"), *storm, (101.5, 3, 4, "EKF variance"),
+             (102.5, 3, 4, "EKF variance"), (103.0, 245, 3, "vehicle 2: lost: landing")]
+    lines = event_lines(texts, t0=99.0, vehicles=(1, 2, 3, 4))
+    assert [(x.first_s, x.level, x.count, x.vehicles) for x in lines] == [
+        (0.0, "info", 1, ()), (1.01, "warning", 12, (1, 2, 3, 4)), (2.5, "warning", 2, (3,)),
+        (4.0, "error", 1, (2,))]
+    assert lines[1].text == "no fresh telemetry for 0.51 s: motion frozen"  # as first seen
+    assert id_ranges([7, 1, 2, 3, 4, 9, 10]) == "1–4, 7, 9, 10"
 
 
 def test_unreadable_files_are_refused_in_one_line(tmp_path: Path) -> None:

@@ -3,12 +3,17 @@
 :class:`TlogRecorder` writes every frame plus the guidance internals as plain
 MAVLink; :class:`TlogIndex` indexes a log in one compiled pass and decodes
 only what is asked; :class:`FlightLog` is a flight as arrays;
-:class:`FlightMetrics` is shared by ``gcs fly`` and ``gcs report``.
+:class:`FlightMetrics` is shared by ``gcs fly`` and ``gcs report``;
+:func:`event_lines` folds a flight's events into one line per condition.
 
 Modules:
 
     ``_columns``   One message type's fields as numpy columns, decoded from many logged
                    frames at once.
+    ``_events``    A flight's events as an operator reads them: one line per condition,
+                   with its count.
+    ``_figstyle``  How every report figure looks: a colour per vehicle, the phase key,
+                   legends off the data, limits marked, SVG and 200 dpi PNG files.
     ``_flight``    A recorded flight read back as arrays: guidance ticks, vehicle tracks,
                    events.
     ``_metrics``   Flight metrics: how well a flight kept its shape, calmed its payload,
@@ -22,6 +27,7 @@ Modules:
                    is.
 """
 
+from gcs.flightlog._events import EventLine, event_lines
 from gcs.flightlog._flight import FlightLog, Track, tilt_angle
 from gcs.flightlog._metrics import FlightMetrics
 from gcs.flightlog._reader import LogError, TlogIndex
@@ -29,12 +35,14 @@ from gcs.flightlog._recorder import TlogRecorder
 from gcs.flightlog._report import write_report
 
 __all__ = [
+    "EventLine",
     "FlightLog",
     "FlightMetrics",
     "LogError",
     "TlogIndex",
     "TlogRecorder",
     "Track",
+    "event_lines",
     "tilt_angle",
     "write_report",
 ]

@@ -1,28 +1,34 @@
 """``gcs report``: figures and a summary of a recorded flight.
 
-* ``formation.png``: inter-vehicle distances against their desired values (top)
+Each figure is written as SVG and as a 200 dpi PNG (``formation.svg`` and
+``formation.png``, ...):
+
+* ``formation``: inter-vehicle distances against their desired values (top)
   and x/y velocities of the vehicles (bottom), like the paper's experimental figure;
   for a plain autopilot log (no team, no guidance ticks) the distances between
   the vehicles' own positions, without desired values;
-* ``trajectories.png``: top view of the vehicles' (and the payload's) paths,
+* ``trajectories``: top view of the vehicles' (and the payload's) paths,
   like the paper's trajectory plot;
-* ``distance_errors.png``: the distance error of every edge, phases shaded;
-* ``accelerations.png``: commanded accelerations against the limits: the norm
+* ``distance_errors``: the distance error of every edge;
+* ``accelerations``: commanded accelerations against the limits: the norm
   against the norm limit (top), each axis against the per-axis limit (bottom);
 * ``summary.json`` and ``summary.md``: duration, worst distance error overall and
   per phase, worst swing, worst bank, rope tensions, link losses of what the
-  vehicles sent (per system and component), events, what the log does not
-  contain and how much of it could not be read.
+  vehicles sent (per system and component), phases, events (one line per
+  condition, :func:`event_lines`), what the log does not contain and how much of
+  it could not be read.
 
-The summary's metrics come from :meth:`FlightLog.metrics`, the same code that
-``gcs fly`` runs live, so both agree for the same flight; a log without guidance
-ticks gets what its telemetry gives (:meth:`FlightLog.telemetry_metrics`).
+How the figures look (a colour per vehicle, the phase key, legends beside the
+axes, limits) is :mod:`gcs.flightlog._figstyle`. The summary's metrics come from
+:meth:`FlightLog.metrics`, the same code that ``gcs fly`` runs live, so both
+agree for the same flight; a log without guidance ticks gets what its telemetry
+gives (:meth:`FlightLog.telemetry_metrics`).
 """
 
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
@@ -31,9 +37,21 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.artist import Artist
+from matplotlib.lines import Line2D
 
+from gcs.flightlog._events import event_lines, id_ranges
+from gcs.flightlog._figstyle import (
+    axis_styles,
+    edge_colours,
+    legend_outside,
+    mark_limit,
+    phase_key,
+    save_figure,
+    shade_phases,
+    vehicle_colours,
+)
 from gcs.flightlog._flight import FlightLog
-from gcs.loop import Phase
 
 __all__ = ["FIGURES", "PAIRS_DRAWN", "PLOT_BUCKETS", "envelope", "vehicle_distances",
            "write_report"]
@@ -41,8 +59,9 @@ __all__ = ["FIGURES", "PAIRS_DRAWN", "PLOT_BUCKETS", "envelope", "vehicle_distan
 PLOT_BUCKETS = 2000
 """Time buckets per plotted series: about two per pixel of a figure 10 inches wide."""
 
-FIGURES = ("formation.png", "trajectories.png", "distance_errors.png", "accelerations.png")
-"""Every figure a report can hold, in order; a log lacking what one needs goes without it."""
+FIGURES = ("formation", "trajectories", "distance_errors", "accelerations")
+"""Every figure a report can hold, in order, each written as ``NAME.svg`` and ``NAME.png``;
+a log lacking what one needs goes without it."""
 
 PAIRS_DRAWN = 8
 """Up to this many vehicles, a plain log's figure draws every pair's distance; beyond,
@@ -90,18 +109,19 @@ def write_report(log: FlightLog, out: Path,
                  progress: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Write the figures and summaries of ``log`` into ``out``; returns the summary."""
     out.mkdir(parents=True, exist_ok=True)
-    figures = []
+    files: list[str] = []
     draw = (_formation, _trajectories, _distance_errors, _accelerations)
-    for name, fn in zip(FIGURES, draw, strict=True):
+    for stem, fn in zip(FIGURES, draw, strict=True):
         if progress is not None:
-            progress(name)
+            progress(stem)
         fig = fn(log)
         if fig is None:
             continue
-        fig.savefig(out / name, dpi=110)
-        plt.close(fig)
-        figures.append(name)
-    summary = _summary(log, figures)
+        try:
+            files += save_figure(fig, out, stem)
+        finally:
+            plt.close(fig)
+    summary = _summary(log, files)
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
     (out / "summary.md").write_text(_markdown(summary))
     return summary
@@ -113,22 +133,33 @@ def _t0(log: FlightLog) -> float:
     return min(starts) if starts else 0.0
 
 
-def _shade_phases(ax: plt.Axes, log: FlightLog, t0: float) -> None:
-    changes = log.phase_changes()
-    colours = {Phase.FORMATION.text: "#e8f4e8", Phase.LIFTING.text: "#fff4dd",
-               Phase.SETTING_DOWN.text: "#fff4dd", Phase.ABORTING.text: "#fde0e0"}
-    for k, (t, name) in enumerate(changes):
-        end = changes[k + 1][0] if k + 1 < len(changes) else log.tick_t[-1]
-        if name in colours:
-            ax.axvspan(t - t0, end - t0, color=colours[name], zorder=0)
+def _shade(ax: plt.Axes, log: FlightLog, t0: float) -> list[str]:
+    """The payload phases shaded on a time plot (none in a log without guidance ticks)."""
+    if not len(log.tick_t):
+        return []
+    return shade_phases(ax, log.phase_changes(), float(log.tick_t[-1]), t0)
+
+
+def _colours(log: FlightLog) -> dict[int, tuple[float, float, float, float]]:
+    """Each vehicle's colour, the same in every figure of the report."""
+    ids = set(log.tracks) | (set(log.team["ids"]) if log.team is not None else set())
+    return vehicle_colours(ids)
+
+
+def _vehicle_handles(colours: dict[int, tuple[float, float, float, float]],
+                     ids: Iterable[int]) -> list[Artist]:
+    return [Line2D([], [], color=colours[vid], lw=1.5, label=f"vehicle {vid}")
+            for vid in sorted(ids)]
 
 
 def _formation(log: FlightLog) -> plt.Figure | None:
     if not log.tracks:
         return None
     t0 = _t0(log)
-    fig, (top, bottom) = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
+    colours = _colours(log)
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(10, 7), sharex=True, layout="constrained")
     desired_drawn = log.team is not None and "dist_err" in log.arrays and len(log.tick_t) > 0
+    shaded = []
     if desired_drawn:
         assert log.team is not None  # desired_drawn says so
         d = np.asarray(log.team["distances"])
@@ -138,18 +169,22 @@ def _formation(log: FlightLog) -> plt.Figure | None:
         ids = log.team["ids"]
         edges = log.team["edges"]
         t = log.tick_t - t0
-        for k in range(len(d)):
+        for k, colour in enumerate(edge_colours(len(d))):
             i, j = edges[k]
-            _plot(top, t, actual[:, k], lw=1.2, label=f"{ids[i]}-{ids[j]}")
+            _plot(top, t, actual[:, k], lw=1.2, color=colour, label=f"{ids[i]}-{ids[j]}")
+        handles: list[Artist] = list(top.get_lines())
         for value in np.unique(np.round(desired, 3), axis=1).T:
-            _plot(top, t, value, "k--", lw=0.8)
-        top.legend(ncol=6, fontsize=7, loc="upper right")
-        _shade_phases(top, log, t0)
+            _plot(top, t, value, "k--", lw=0.8, label="_desired")
+        handles.append(Line2D([], [], color="k", ls="--", lw=0.8, label="desired"))
+        legend_outside(top, handles, title="edge")
+        shaded = _shade(top, log, t0)
     elif (pairs := vehicle_distances(log)) is not None:
         t, distances = pairs
-        for (a, b), d in distances.items():
-            _plot(top, t - t0, d, lw=1.2, label=f"{a}-{b}" if b else f"closest ({a} vehicles)")
-        top.legend(ncol=6, fontsize=7, loc="upper right")
+        for ((a, b), d), colour in zip(distances.items(), edge_colours(len(distances)),
+                                       strict=True):
+            _plot(top, t - t0, d, lw=1.2, color=colour,
+                  label=f"{a}-{b}" if b else f"closest ({a} vehicles)")
+        legend_outside(top, top.get_lines(), title="pair")
         top.set_title("between the vehicles' positions (no desired values: no team header)",
                       fontsize=9)
     else:
@@ -157,14 +192,18 @@ def _formation(log: FlightLog) -> plt.Figure | None:
                  ha="center", va="center", transform=top.transAxes)
     top.set_ylabel("distance [m]")
     for sysid, tr in sorted(log.tracks.items()):
-        _plot(bottom, tr.t - t0, tr.v_ned[:, 0], lw=1, label=f"{sysid} vx")
-        _plot(bottom, tr.t - t0, tr.v_ned[:, 1], lw=1, ls=":", label=f"{sysid} vy")
-    bottom.set_ylabel("velocity [m/s] (x solid, y dotted)")
+        _plot(bottom, tr.t - t0, tr.v_ned[:, 0], lw=1, color=colours[sysid],
+              label=f"vehicle {sysid} x")
+        _plot(bottom, tr.t - t0, tr.v_ned[:, 1], lw=1, ls=":", color=colours[sysid],
+              label=f"vehicle {sysid} y")
+    _shade(bottom, log, t0)
+    bottom.axhline(0, color="k", lw=0.5, label="_zero")
+    bottom.set_ylabel("velocity [m/s]")
     bottom.set_xlabel("time [s]")
-    bottom.legend(ncol=4, fontsize=7, loc="upper right")
+    legend_outside(bottom, _vehicle_handles(colours, log.tracks) + axis_styles())
+    phase_key(fig, shaded)
     fig.suptitle("Distances (desired dashed) and velocities" if desired_drawn
                  else "Distances and velocities")
-    fig.tight_layout()
     return fig
 
 
@@ -200,22 +239,27 @@ def vehicle_distances(log: FlightLog, samples: int = 8 * PLOT_BUCKETS
 def _trajectories(log: FlightLog) -> plt.Figure | None:
     if not log.tracks:
         return None
-    fig, ax = plt.subplots(figsize=(7, 7))
+    colours = _colours(log)
+    fig, ax = plt.subplots(figsize=(8, 7), layout="constrained")
+    handles: list[Artist] = []
     for sysid, tr in sorted(log.tracks.items()):
         if not len(tr.t):
             continue
-        _path(ax, tr.p_ned[:, 1], tr.p_ned[:, 0], lw=1, label=f"vehicle {sysid}")
-        ax.plot(tr.p_ned[-1, 1], tr.p_ned[-1, 0], "o", ms=4, color=ax.lines[-1].get_color())
+        handles += _path(ax, tr.p_ned[:, 1], tr.p_ned[:, 0], lw=1, color=colours[sysid],
+                         label=f"vehicle {sysid}")
+        ax.plot(tr.p_ned[-1, 1], tr.p_ned[-1, 0], "o", ms=4, color=colours[sysid],
+                label=f"_vehicle {sysid} end")
     if "payload" in log.arrays:
         p = log.arrays["payload"]
-        _path(ax, p[:, 1], p[:, 0], "k-", lw=1.5, label="payload")
+        handles += _path(ax, p[:, 1], p[:, 0], "k-", lw=1.5, label="payload")
+    if handles:
+        handles.append(Line2D([], [], color="0.3", ls="", marker="o", ms=4, label="end"))
     ax.set_xlabel("east [m]")
     ax.set_ylabel("north [m]")
-    ax.set_aspect("equal")
+    ax.set_aspect("equal", adjustable="datalim")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+    legend_outside(ax, handles)
     ax.set_title("Trajectories (top view)")
-    fig.tight_layout()
     return fig
 
 
@@ -223,45 +267,59 @@ def _distance_errors(log: FlightLog) -> plt.Figure | None:
     if "dist_err" not in log.arrays or log.team is None:
         return None
     t0 = _t0(log)
-    fig, ax = plt.subplots(figsize=(10, 4))
+    fig, ax = plt.subplots(figsize=(10, 4), layout="constrained")
     e = log.arrays["dist_err"]
     ids, edges = log.team["ids"], log.team["edges"]
-    for k in range(e.shape[1]):
+    for k, colour in enumerate(edge_colours(e.shape[1])):
         i, j = edges[k]
-        _plot(ax, log.tick_t - t0, e[:, k], lw=1, label=f"{ids[i]}-{ids[j]}")
-    _shade_phases(ax, log, t0)
-    ax.axhline(0, color="k", lw=0.5)
+        _plot(ax, log.tick_t - t0, e[:, k], lw=1, color=colour, label=f"{ids[i]}-{ids[j]}")
+    legend_outside(ax, ax.get_lines(), title="edge")
+    phase_key(fig, _shade(ax, log, t0))
+    ax.axhline(0, color="k", lw=0.5, label="_zero")
     ax.set_xlabel("time [s]")
     ax.set_ylabel("distance error e_k [m]")
-    ax.legend(ncol=6, fontsize=7)
-    ax.set_title("Distance error per edge (formation flight shaded green)")
-    fig.tight_layout()
+    ax.set_title("Distance error per edge")
     return fig
 
 
 def _accelerations(log: FlightLog) -> plt.Figure | None:
     if "acc_cmd" not in log.arrays or not len(log.tick_t):
         return None
-    t = log.tick_t - _t0(log)
+    t0 = _t0(log)
+    t = log.tick_t - t0
     acc = log.per_vehicle("acc_cmd", 2)
     ids = log.team["ids"] if log.team is not None else tuple(range(1, log.n_vehicles + 1))
-    fig, (top, bottom) = plt.subplots(2, 1, figsize=(10, 6), sharex=True)
+    colours = vehicle_colours(set(ids) | set(log.tracks))
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(10, 6), sharex=True, layout="constrained")
     for i, vid in enumerate(ids):
-        line = _plot(top, t, np.linalg.norm(acc[:, i], axis=1), lw=1, label=f"|a| {vid}")[0]
-        _plot(bottom, t, acc[:, i, 0], lw=1, color=line.get_color(), label=f"{vid} x")
-        _plot(bottom, t, acc[:, i, 1], lw=1, ls=":", color=line.get_color(), label=f"{vid} y")
+        _plot(top, t, np.linalg.norm(acc[:, i], axis=1), lw=1, color=colours[vid],
+              label=f"vehicle {vid} |a|")
+        _plot(bottom, t, acc[:, i, 0], lw=1, color=colours[vid], label=f"vehicle {vid} x")
+        _plot(bottom, t, acc[:, i, 1], lw=1, ls=":", color=colours[vid],
+              label=f"vehicle {vid} y")
+    top_handles = _vehicle_handles(colours, ids)
+    bottom_handles = axis_styles()
     if log.team is not None:
-        top.axhline(float(log.team["accel_norm"]), color="r", ls="--", lw=1, label="norm limit")
-        for sign in (1.0, -1.0):
-            bottom.axhline(sign * float(log.team["accel_axis"]), color="m", ls="--", lw=1,
-                           label="per-axis limit" if sign > 0 else None)
+        with np.errstate(invalid="ignore"):
+            peak_norm = float(np.nanmax(np.linalg.norm(acc, axis=2), initial=0.0))
+            peak_axis = float(np.nanmax(np.abs(acc), initial=0.0))
+        line = mark_limit(top, float(log.team["accel_norm"]), peak_norm,
+                          label="norm limit", unit="m/s^2", colour="r")
+        top_handles += [line] if line is not None else []
+        line = mark_limit(bottom, float(log.team["accel_axis"]), peak_axis,
+                          label="per-axis limit", unit="m/s^2", colour="m",
+                          symmetric=True)
+        bottom_handles += [line] if line is not None else []
+    shaded = _shade(top, log, t0)
+    _shade(bottom, log, t0)
+    bottom.axhline(0, color="k", lw=0.5, label="_zero")
     top.set_ylabel("|a| [m/s^2]")
-    bottom.set_ylabel("a per axis [m/s^2] (x solid, y dotted)")
+    bottom.set_ylabel("a per axis [m/s^2]")
     bottom.set_xlabel("time [s]")
-    top.legend(ncol=5, fontsize=7)
-    bottom.legend(ncol=5, fontsize=7)
+    legend_outside(top, top_handles)
+    legend_outside(bottom, bottom_handles)
+    phase_key(fig, shaded)
     fig.suptitle("Commanded horizontal accelerations against the limits")
-    fig.tight_layout()
     return fig
 
 
@@ -283,9 +341,16 @@ def _summary(log: FlightLog, figures: list[str]) -> dict[str, Any]:
         "phases": [{"t_s": round(t - t0, 2), "phase": p} for t, p in log.phase_changes()],
         "events": [{"t_s": round(t - t0, 2), "system": s, "severity": sev, "text": txt}
                    for t, s, sev, txt in log.texts],
+        "event_lines": [line.to_json() for line in event_lines(
+            (x for x in log.texts if not _phase_text(log, x)), t0, log.tracks)],
         "missing": log.missing,
         "figures": figures,
     }
+
+
+def _phase_text(log: FlightLog, text: tuple[float, int, int, str]) -> bool:
+    """A ground station's ``phase: ...`` text: the phases have their own list."""
+    return text[1] in log.ground and text[3].startswith("phase: ")
 
 
 def _markdown(s: dict[str, Any]) -> str:
@@ -311,6 +376,24 @@ def _markdown(s: dict[str, Any]) -> str:
               f"Damaged log: {s['damage']}" if s["damage"] else "Read whole: nothing "
               "truncated, skipped or rejected.", ""]
     if s["missing"]:
-        lines += ["Not in this log:", ""] + [f"- {x}" for x in s["missing"]]
+        lines += ["Not in this log:", ""] + [f"- {x}" for x in s["missing"]] + [""]
+    if s["phases"]:
+        lines += ["## Phases", "", ", ".join(f"{p['phase']} at {p['t_s']} s"
+                                             for p in s["phases"]), ""]
+    lines += ["## Events", ""] + _event_table(s["event_lines"])
     lines += ["", "Figures: " + ", ".join(s["figures"])]
     return "\n".join(lines) + "\n"
+
+
+def _event_table(rows: list[dict[str, Any]]) -> list[str]:
+    """One row per condition: when first, level, how often, which vehicles, what."""
+    if not rows:
+        return ["None logged."]
+    table = ["One row per condition: `count` is how often it was logged in all (once per "
+             "vehicle it covers, each time it happened), `first [s]` when first.", "",
+             "| first [s] | level | count | vehicles | event |", "|---:|---|---:|---|---|"]
+    for row in rows:
+        text = str(row["text"]).replace("|", "\\|")
+        table.append(f"| {row['first_s']} | {row['level']} | {row['count']} | "
+                     f"{id_ranges(row['vehicles']) or '-'} | {text} |")
+    return table
