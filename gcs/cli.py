@@ -15,6 +15,8 @@ from typing import TYPE_CHECKING
 from gcs.common import ConfigError
 
 if TYPE_CHECKING:
+    from gcs.analysis import Analysis
+    from gcs.config import Team
     from gcs.flightlog import FlightLog
 
 __all__ = ["main"]
@@ -26,7 +28,29 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
 
     team = load_team(args.config)
     result = analyze(team)
+    if args.verify and result.ok:
+        return _verify(args, team, result)
     print(analysis_json(result) if args.json else format_report(result, team.source))
+    return 0 if result.ok else 1
+
+
+def _verify(args: argparse.Namespace, team: Team, analysis: Analysis) -> int:
+    """``gcs analyze --verify``: the team flown once per seed, measured against ``analysis``."""
+    import json
+
+    from gcs.app import check_scenario, format_verify, load_scenario, parse_seeds, verify
+    from gcs.common import default_config
+
+    scenario = args.scenario or str(default_config("scenarios/paper_flight.yaml"))
+    seeds = parse_seeds(args.seeds)
+    if args.jobs is not None and args.jobs < 1:
+        raise ConfigError("--jobs", "", f"must be at least 1, got {args.jobs}")
+    for warning in check_scenario(load_scenario(scenario), team, scenario):
+        print(f"gcs analyze: warning: {warning}", file=sys.stderr)
+    result = verify(team, scenario, analysis, seeds=seeds, jobs=args.jobs,
+                    progress=lambda line: print(f"gcs analyze --verify: {line}",
+                                                file=sys.stderr, flush=True))
+    print(json.dumps(result.to_json()) if args.json else format_verify(result))
     return 0 if result.ok else 1
 
 
@@ -39,6 +63,63 @@ def _cmd_sim(args: argparse.Namespace) -> int:
     return 0  # not reached
 
 
+def _analysis_refuses(team: Team, command: str, *, override: bool) -> bool:
+    """True (and every violation on stderr) when ``gcs analyze`` refuses ``team`` and the
+    user did not override it: nothing is started for a team the certificate refuses."""
+    from gcs.analysis import analyze
+
+    result = analyze(team)
+    if result.ok or override:
+        return False
+    print(f"gcs {command}: error: {team.source}: gcs analyze refuses this team "
+          f"({len(result.violations)} violation(s)); --override-analysis flies it anyway",
+          file=sys.stderr)
+    for v in result.violations:
+        print(f"  {v.term}: {v.message}", file=sys.stderr)
+    return True
+
+
+def _cmd_key(args: argparse.Namespace) -> int:
+    from gcs.config import (
+        GcsLinkConfig,
+        ensure_team_key,
+        key_fingerprint,
+        key_from_passphrase,
+        load_team,
+        team_key_path,
+    )
+    from gcs.link import LinkError, install_signing_key
+    from gcs.wire import write_signing_key
+
+    if args.config:
+        team = load_team(args.config)
+        path = team_key_path(team.config.gcs, Path(team.source).parent)
+    else:
+        path = team_key_path(GcsLinkConfig(), Path.cwd())
+    if args.passphrase_stdin or args.replace:
+        if path.exists() and not args.replace:
+            raise ConfigError(str(path), "", "a team key exists already; --replace overwrites "
+                              "it (every machine and vehicle then needs the new one)")
+        secret = (key_from_passphrase(sys.stdin.readline().rstrip("\n"), "stdin").secret
+                  if args.passphrase_stdin else None)
+        path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
+        path.unlink(missing_ok=True)
+        write_signing_key(path, secret=secret)
+    key, created = ensure_team_key(path)
+    print(f"team key {key_fingerprint(key)} in {path}{' (new)' if created else ''}")
+    if args.install:
+        if args.sysid is None:
+            raise ConfigError("--install", "", "needs --sysid, the vehicle's system id")
+        try:
+            install_signing_key(args.install, args.sysid, key, component_id=args.component)
+        except LinkError as exc:
+            print(f"gcs key: error: {exc}", file=sys.stderr)
+            return 1
+        print(f"vehicle {args.sysid} on {args.install} now signs with team key "
+              f"{key_fingerprint(key)}")
+    return 0
+
+
 def _cmd_fly(args: argparse.Namespace) -> int:
     import json
     from pathlib import Path
@@ -47,8 +128,13 @@ def _cmd_fly(args: argparse.Namespace) -> int:
     from gcs.config import load_team
 
     team = load_team(args.config)
+    if args.insecure:
+        team = team.without_signing()
     scenario = load_scenario(args.scenario)
-    check_scenario(scenario, team, args.scenario)
+    if _analysis_refuses(team, "fly", override=args.override_analysis):
+        return 1
+    for warning in check_scenario(scenario, team, args.scenario):
+        print(f"gcs fly: warning: {warning}", file=sys.stderr)
     if args.speed != "max":
         try:
             if float(args.speed) <= 0:
@@ -58,7 +144,7 @@ def _cmd_fly(args: argparse.Namespace) -> int:
                               f"got {args.speed!r}") from None
     result = fly(team, scenario, speed=args.speed,
                  record=Path(args.record) if args.record else None, connect=args.connect,
-                 progress=not args.quiet)
+                 progress=not args.quiet, override_analysis=args.override_analysis)
     data = result.to_json()
     if args.json:
         print(json.dumps(data))
@@ -155,22 +241,31 @@ def _default_team() -> str:
 def _cmd_demo(args: argparse.Namespace) -> int:
     from pathlib import Path
 
+    from gcs.config import load_team
     from web import run_demo
 
-    return run_demo(args.config or _default_team(), host=args.host, port=args.port,
+    config = args.config or _default_team()
+    if _analysis_refuses(load_team(config), "demo", override=args.override_analysis):
+        return 1
+    return run_demo(config, host=args.host, port=args.port,
                     gamepad=Path(args.gamepad) if args.gamepad else None,
-                    no_gamepad=args.no_gamepad)
+                    no_gamepad=args.no_gamepad, insecure=args.insecure,
+                    override_analysis=args.override_analysis)
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
+    from gcs.config import load_team
     from web import run_gcs
 
+    if _analysis_refuses(load_team(args.config), "run", override=args.override_analysis):
+        return 1
     return run_gcs(args.config, host=args.host, port=args.port,
                    record=Path(args.record) if args.record else None,
                    gamepad=Path(args.gamepad) if args.gamepad else None,
-                   no_gamepad=args.no_gamepad)
+                   no_gamepad=args.no_gamepad, insecure=args.insecure,
+                   override_analysis=args.override_analysis)
 
 
 def _cmd_replay(args: argparse.Namespace) -> int:
@@ -180,6 +275,15 @@ def _cmd_replay(args: argparse.Namespace) -> int:
     log = _load_log(path, "replay", quiet=args.quiet)
     if log is None:
         return 2
+    if args.export is not None:
+        from web import run_export
+
+        out = Path(args.export)
+        try:
+            return run_export(log, out, name=path.name, quiet=args.quiet)
+        except OSError as exc:
+            print(f"gcs replay: error: {_os_error(exc, out)}", file=sys.stderr)
+            return 2
     try:
         return run_replay(log, name=path.name, host=args.host, port=args.port)
     except OSError as exc:
@@ -197,6 +301,17 @@ def _add_page_options(p: argparse.ArgumentParser) -> None:
                    help="gamepad mapping (default: configs/gamepad.yaml in the current "
                         "directory, else the shipped one)")
     p.add_argument("--no-gamepad", action="store_true", help="do not read a gamepad")
+    _add_flight_options(p)
+
+
+def _add_flight_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--override-analysis", action="store_true",
+                   help="fly a team that gcs analyze refuses (default: refuse at once, "
+                        "listing every violation); each violation stays on the page")
+    p.add_argument("--insecure", action="store_true",
+                   help="no MAVLink signing on the simulated links: anyone who reaches a "
+                        "port can command the vehicles (default: the team key, made on "
+                        "first use in the user's config directory)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -214,6 +329,17 @@ def build_parser() -> argparse.ArgumentParser:
                                    "violates the condition.")
     p.add_argument("config", help="team config (YAML), e.g. configs/bebop_square.yaml")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--verify", action="store_true",
+                   help="fly the team through a scenario in the lockstep simulator, once per "
+                        "seed, and print measured against predicted per figure (exit 1 when "
+                        "a flight exceeds the analysis or does not complete)")
+    p.add_argument("--scenario", metavar="S",
+                   help="scenario of --verify (default configs/scenarios/paper_flight.yaml)")
+    p.add_argument("--seeds", default="1-4", metavar="SEEDS",
+                   help="simulator seeds of --verify (sensor noise, gusts): 1-4 (default), "
+                        "7, 1,3,9-10")
+    p.add_argument("--jobs", type=int, metavar="N",
+                   help="flights of --verify at a time (default: the machine's cores)")
     p.set_defaults(func=_cmd_analyze)
 
     p = sub.add_parser("sim", help="host a simulated team behind zenoh (and UDP)",
@@ -241,7 +367,29 @@ def build_parser() -> argparse.ArgumentParser:
                    help="join a running `gcs sim` at this zenoh endpoint instead")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    _add_flight_options(p)
     p.set_defaults(func=_cmd_fly)
+
+    p = sub.add_parser("key", help="the team's MAVLink signing key: show, make, install",
+                       description="Every simulated link is signed with the team key, made on "
+                                   "first use in the user's config directory; copy the file to "
+                                   "fly across machines. --install sends it to a real "
+                                   "autopilot (SETUP_SIGNING) and checks that it signs.")
+    p.add_argument("--config", help="team config whose gcs.team_key names the file "
+                                    "(default: the user's team key)")
+    p.add_argument("--passphrase-stdin", action="store_true",
+                   help="make the key from a passphrase read from stdin, as MAVProxy's "
+                        "'signing key PASSPHRASE' does (SHA-256)")
+    p.add_argument("--replace", action="store_true",
+                   help="replace an existing key (a fresh random one without "
+                        "--passphrase-stdin)")
+    p.add_argument("--install", metavar="CONNECTION",
+                   help="send the key to a real autopilot over this pymavlink connection "
+                        "string (e.g. /dev/ttyACM0, udpin:0.0.0.0:14550), best over USB")
+    p.add_argument("--sysid", type=int, help="the autopilot's system id (with --install)")
+    p.add_argument("--component", type=int, default=1,
+                   help="the autopilot's component id (default 1)")
+    p.set_defaults(func=_cmd_key)
 
     p = sub.add_parser("report", help="figures and summary of a recorded flight",
                        description="Distances and velocities (like the paper's figure), "
@@ -282,8 +430,45 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--host", default="127.0.0.1",
                    help="interface to serve the page on (default 127.0.0.1)")
     p.add_argument("--quiet", action="store_true", help="no progress bars while loading")
+    p.add_argument("--export", metavar="FILE.html",
+                   help="write the replay (scene, plots, timeline) as one HTML file that "
+                        "opens in a browser with no server and no network, instead of "
+                        "serving it")
     p.set_defaults(func=_cmd_replay)
+    _add_certs_parser(sub)
     return parser
+
+
+def _cmd_certs(args: argparse.Namespace) -> int:
+    from gcs.transport import make_team_certificates
+
+    files = make_team_certificates(args.dir, args.hosts, force=args.force, days=args.days)
+    print(f"team CA and certificates for sim, gcs, viewer in {Path(args.dir).resolve()}:")
+    for path in files:
+        print(f"  {path.name}")
+    print("copy ca.pem and a role's .pem and .key to each machine (keep ca.key off them); "
+          "start with `gcs sim --tls DIR` and `gcs: {zenoh: {tls: {dir: DIR}}}`")
+    return 0
+
+
+def _add_certs_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    p = sub.add_parser("certs", help="make the team's TLS certificates for zenoh (CA, sim, "
+                                     "gcs, viewer)",
+                       description="Writes a CA and a certificate per role (sim, gcs, "
+                                   "viewer; EC P-256, keys mode 0600) into DIR, for zenoh "
+                                   "over TLS with mutual authentication and access control "
+                                   "by role. Never overwrites without --force.")
+    p.add_argument("dir", metavar="DIR", help="folder to write them into (made if absent)")
+    p.add_argument("--hosts", nargs="+", default=[], metavar="HOST",
+                   help="host names and IP addresses the peers connect to (localhost, "
+                        "127.0.0.1 and ::1 are always in)")
+    p.add_argument("--days", type=int, default=1825,
+                   help="validity of the role certificates, days (default 1825; the CA "
+                        "twice that)")
+    p.add_argument("--force", action="store_true",
+                   help="replace existing certificates (a new CA: every machine then needs "
+                        "the new files)")
+    p.set_defaults(func=_cmd_certs)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -301,6 +486,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     except KeyboardInterrupt:
         return 130
+    except RuntimeError as exc:
+        from gcs.app import SimStartError  # loaded already by a command that starts one
+
+        if not isinstance(exc, SimStartError):
+            raise
+        print(f"gcs {args.command}: error: {exc}", file=sys.stderr)  # one line, no traceback
+        return 1
 
 
 if __name__ == "__main__":

@@ -7,7 +7,7 @@ Modules:
     ``_backend``      What a simulation host (the zenoh/MAVLink sim process) needs from a
                       physics backend.
     ``_config``       World configuration: integration rate, ropes, payload drag, ground,
-                      wind, sensors.
+                      wind, sensors, and where on Earth the world lies.
     ``_dynamics``     Equations of motion of the world: one physics step of every vehicle
                       and the payload.
     ``_fabric``       The sim host's side of zenoh: vehicle links and tokens, clock, truth,
@@ -46,7 +46,7 @@ Modules:
 """
 
 from sim._backend import PhysicsBackend
-from sim._config import WorldConfig, load_world_config
+from sim._config import HomeConfig, WorldConfig, load_world_config
 from sim._faults import ControlAction, ControlCommand, parse_control
 from sim._host import LIFT_LAG_S
 from sim._layout import Layout, paper_square, ring_layout
@@ -68,6 +68,7 @@ __all__ = [
     "BackgroundStepping",
     "ControlAction",
     "ControlCommand",
+    "HomeConfig",
     "Layout",
     "PhysicsBackend",
     "World",

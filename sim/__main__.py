@@ -65,8 +65,8 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--udp", action="store_true",
                    help="also open a MAVLink UDP port per vehicle (SITL style)")
     p.add_argument("--udp-base-port", type=int, default=DEFAULT_BASE_PORT, metavar="P",
-                   help=f"UDP port of the first vehicle, vehicle k at P+k "
-                        f"(default {DEFAULT_BASE_PORT})")
+                   help=f"UDP port of the team's first vehicle (on P); the others follow "
+                        f"in team order on P+1, P+2, ... (default {DEFAULT_BASE_PORT})")
     p.add_argument("--udp-gcs-port", type=int, default=DEFAULT_GCS_PORT, metavar="P",
                    help=f"ground-station port on 127.0.0.1 every vehicle sends to "
                         f"(default {DEFAULT_GCS_PORT}; 0: none, only answer peers)")
@@ -74,11 +74,23 @@ def _parser() -> argparse.ArgumentParser:
                    help=f"zenoh endpoints to listen on (default {DEFAULT_ENDPOINT})")
     p.add_argument("--connect", action="extend", nargs="+", default=[], metavar="EP",
                    help="zenoh endpoints to connect to (default none)")
+    p.add_argument("--tls", metavar="DIR",
+                   help="zenoh over TLS with mutual authentication and access control by "
+                        "role, with the certificates `gcs certs DIR` made (ca.pem, sim.pem, "
+                        "sim.key); tcp/ endpoints become tls/")
     p.add_argument("--seed", type=int, default=0, help="seed of sensor noise and gusts")
     p.add_argument("--duration", type=float, default=None, metavar="S",
                    help="stop after S seconds of sim time (default: run until stopped)")
     p.add_argument("--fleet", default=None,
                    help="fleet name in the zenoh keys (default: the team file's gcs.fleet)")
+    p.add_argument("--insecure", action="store_true",
+                   help="no MAVLink signing: anyone who reaches a port commands the vehicles "
+                        "(default: every vehicle signs with the team key and refuses "
+                        "unsigned frames)")
+    p.add_argument("--separate-origins", action="store_true",
+                   help="give each vehicle its own local origin at its start position, as GPS "
+                        "autopilots do (LOCAL_POSITION_NED starts at 0, 0 for every vehicle; "
+                        "global positions stay true)")
     p.add_argument("--background", action="store_true",
                    help="paced runs: step at background CPU priority while keeping up, so a "
                         "GCS on the same machine always goes first (Linux; needs root or "
@@ -96,7 +108,8 @@ def _options(args: argparse.Namespace) -> HostOptions:
                        connect=tuple(args.connect), udp=args.udp,
                        udp_base_port=args.udp_base_port, udp_gcs_port=args.udp_gcs_port or None,
                        seed=args.seed, duration=args.duration, fleet=args.fleet,
-                       background=args.background)
+                       signing=not args.insecure, background=args.background,
+                       separate_origins=args.separate_origins, tls=args.tls)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

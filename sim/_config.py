@@ -1,4 +1,5 @@
-"""World configuration: integration rate, ropes, payload drag, ground, wind, sensors.
+"""World configuration: integration rate, ropes, payload drag, ground, wind, sensors, and
+where on Earth the world lies.
 
 Loaded from configs/sim/default.yaml. What differs per run (airframe, start
 positions, rope lengths, payload mass) is passed to :class:`sim.World`
@@ -10,10 +11,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from gcs.common import field, from_mapping, load_yaml
+from gcs.common import STANDARD_GRAVITY, field, from_mapping, load_yaml
+from gcs.wire import Geodetic
+from vehicles.endpoint import DEFAULT_REFERENCE
 
 __all__ = [
     "GroundConfig",
+    "HomeConfig",
     "RopeConfig",
     "SensorConfig",
     "WindConfig",
@@ -76,19 +80,41 @@ class SensorConfig:
 
 
 @dataclass(frozen=True)
+class HomeConfig:
+    """Where the world's NED origin (the payload's start) lies on Earth: the reference every
+    vehicle's GPS, global position, home and origin are given from."""
+
+    latitude_deg: float = field(doc="latitude, degrees north", default=DEFAULT_REFERENCE.lat_deg,
+                                ge=-90.0, le=90.0)
+    longitude_deg: float = field(doc="longitude, degrees east",
+                                 default=DEFAULT_REFERENCE.lon_deg, ge=-180.0, le=180.0)
+    altitude_m: float = field(doc="height above the WGS-84 ellipsoid (sent as AMSL: no "
+                              "geoid), m", default=DEFAULT_REFERENCE.alt_m, ge=-1000.0,
+                              le=20000.0)
+
+    @property
+    def geodetic(self) -> Geodetic:
+        """As a :class:`gcs.wire.Geodetic`."""
+        return Geodetic(self.latitude_deg, self.longitude_deg, self.altitude_m)
+
+
+@dataclass(frozen=True)
 class WorldConfig:
     """Everything about the simulated world except the team's own arrays."""
 
     physics_rate_hz: float = field(
         doc="integration rate, Hz; a whole multiple of the autopilot and sensor rates",
         default=2048.0, gt=0.0)
-    gravity: float = field(doc="gravitational acceleration, m/s^2", default=9.81, gt=0.0)
+    gravity: float = field(doc="gravitational acceleration, m/s^2 (standard gravity, as the "
+                           "team's analysis)", default=STANDARD_GRAVITY, gt=0.0)
     payload_drag_coefficient: float = field(doc="linear payload drag per airspeed, N s/m",
                                             default=0.02, ge=0.0)
     rope: RopeConfig = field(doc="rope model", default_factory=RopeConfig)
     ground: GroundConfig = field(doc="ground contact model", default_factory=GroundConfig)
     wind: WindConfig = field(doc="wind model", default_factory=WindConfig)
     sensors: SensorConfig = field(doc="sensor rates and noise", default_factory=SensorConfig)
+    home: HomeConfig = field(doc="geodetic position of the world's NED origin",
+                             default_factory=HomeConfig)
 
     def __post_init__(self) -> None:
         for name, rate in (("sensors.imu_rate_hz", self.sensors.imu_rate_hz),

@@ -42,7 +42,18 @@ from gcs.transport import (
     declare_alive,
     open_session,
 )
-from gcs.wire import CLOCK_MAX_BYTES, SimTruth, decode_time, encode_clock, keys
+from gcs.wire import (
+    CLOCK_MAX_BYTES,
+    SEAL_OVERHEAD,
+    Sealer,
+    SealError,
+    SigningKey,
+    SimTruth,
+    Unsealer,
+    decode_time,
+    encode_clock,
+    keys,
+)
 from sim._faults import CONTROL_MAX_BYTES
 from sim._inbox import ClockAck, ControlMessage, Inbox, Refusals
 
@@ -89,9 +100,12 @@ class HostFabric:
 
     def __init__(self, settings: ZenohSettings, *, fleet: str, sysids: Sequence[int],
                  inbox: Inbox, on_frame: Callable[[int, bytes], None],
-                 announce_sent: bool = False, refusals: Refusals | None = None) -> None:
+                 announce_sent: bool = False, refusals: Refusals | None = None,
+                 seal_key: SigningKey | None = None) -> None:
         """``on_frame(index, payload)`` runs on zenoh's threads for each vehicle's payload;
-        ``refusals`` counts what is refused on the way.
+        ``refusals`` counts what is refused on the way; ``seal_key`` (the team key) seals
+        the clock and truth and is required on acks and control messages
+        (:mod:`gcs.wire._seal`).
 
         ``announce_sent`` (lockstep): every clock sample carries how many truth
         samples and how many payloads of each vehicle were published
@@ -106,6 +120,11 @@ class HostFabric:
         self._settings = settings
         self.refusals = refusals if refusals is not None else Refusals()
         """Inputs refused (oversize payloads, malformed acks), by kind."""
+        self._seal_clock = Sealer(seal_key, keys.clock(fleet))
+        self._seal_truth = Sealer(seal_key, keys.sim(fleet, TRUTH_TOPIC))
+        self._open_ack = Unsealer(seal_key, keys.clock_ack(fleet))
+        self._open_control = Unsealer(seal_key, keys.sim(fleet, CONTROL_TOPIC))
+        self._extra = SEAL_OVERHEAD if seal_key is not None else 0
         self._session = open_session(settings)
         self._links: dict[int, _VehicleLink] = {}
         self._subscribers: list[zenoh.Subscriber] = []
@@ -167,15 +186,15 @@ class HostFabric:
     def publish_clock(self, t: float) -> None:
         """Publish the sim time (with each vehicle's payload count when announcing)."""
         if not self._announce_sent:
-            self._clock.put(encode_clock(t))
+            self._clock.put(self._seal_clock.seal(encode_clock(t)))
             return
         with self._sent_lock:
             sent = dict(zip(self._sysids, self._sent, strict=True))
-        self._clock.put(encode_clock(t, self._truth_sent, sent))
+        self._clock.put(self._seal_clock.seal(encode_clock(t, self._truth_sent, sent)))
 
     def publish_truth(self, truth: SimTruth) -> None:
         """Publish one ground-truth sample."""
-        self._truth.put(truth.to_bytes())
+        self._truth.put(self._seal_truth.seal(truth.to_bytes()))
         self._truth_sent += 1  # the loop's thread only, as the clock
 
     def close(self) -> None:
@@ -194,20 +213,24 @@ class HostFabric:
                 self._session.close()
 
     def _on_ack(self, sample: zenoh.Sample, inbox: Inbox) -> None:
-        data = bounded_payload(sample, CLOCK_MAX_BYTES)
+        limit = CLOCK_MAX_BYTES + self._extra
+        data = bounded_payload(sample, limit)
         if data is None:
-            self.refusals.refuse("clock ack", f"{len(sample.payload)} bytes, more than "
-                                              f"{CLOCK_MAX_BYTES}")
+            self.refusals.refuse("clock ack", f"{len(sample.payload)} bytes, more than {limit}")
             return
         try:
-            inbox.put(ClockAck(decode_time(data)))
-        except ValueError as exc:
+            inbox.put(ClockAck(decode_time(self._open_ack.open(data))))
+        except ValueError as exc:  # SealError is one
             self.refusals.refuse("clock ack", str(exc))
 
     def _on_control(self, sample: zenoh.Sample, inbox: Inbox) -> None:
-        data = bounded_payload(sample, CONTROL_MAX_BYTES)
+        limit = CONTROL_MAX_BYTES + self._extra
+        data = bounded_payload(sample, limit)
         if data is None:  # parsed by the loop, which refuses the rest (sim._faults)
             self.refusals.refuse("control message", f"{len(sample.payload)} bytes, more than "
-                                                    f"{CONTROL_MAX_BYTES}")
+                                                    f"{limit}")
             return
-        inbox.put(ControlMessage(data))
+        try:
+            inbox.put(ControlMessage(self._open_control.open(data)))
+        except SealError as exc:
+            self.refusals.refuse("control message", str(exc))

@@ -26,6 +26,7 @@ responsive once constructed and its clock starts at :data:`CHUNK_S`.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import logging
 import math
@@ -35,8 +36,8 @@ from pathlib import Path
 
 import numpy as np
 
-from gcs.config import Team
-from gcs.wire import SigningKey, SimTruth, load_signing_key, vec3
+from gcs.config import Team, ensure_team_key, link_key, team_key_path
+from gcs.wire import SigningKey, SimTruth, vec3
 from sim._config import WorldConfig
 from sim._fabric import HostFabric
 from sim._faults import ControlAction, parse_control
@@ -95,16 +96,23 @@ class SimHost:
         self._options = options
         self._sysids = tuple(team.formation.ids)
         self._period = 1.0 / cfg.guidance.rate_hz
-        signing_keys = _signing_keys(team)
+        signing_keys = self._signing_keys = _signing_keys(team, signing=options.signing)
         self._world, self._autopilot = build_team(
             team_layout(team, ground_z_ned=world_config.ground.z_ned),
             payload_mass=cfg.payload.mass, rng=np.random.default_rng(options.seed),
             airframe=cfg.airframe, world_config=world_config,
             autopilot_config=autopilot_config)
+        if options.separate_origins:  # each its own origin where it stands, at the world's level
+            for k, (north, east, _) in enumerate(self._world.p_ned):
+                self._autopilot.set_origin(k, (north, east, 0.0))
         self._world.run(self._autopilot, CHUNK_S)  # warm-up: compile or load the kernels now
         self._inbox = Inbox()
         self._refusals = Refusals()
+        self._signature_refused = [0] * len(self._sysids)
         self._status = [VehicleStatus.LIVE] * len(self._sysids)
+        self._cut_until: dict[int, float] = {}  # vehicle index -> sim time its timed cut ends
+        self._wind_mean = self._world.params.wind_mean.copy()  # the world config's
+        self._gusts: list[tuple[float, np.ndarray]] = []  # (sim time it ends, wind it adds)
         self._pacer = Pacer(options.speed)
         self._due: float | None = None  # wall time the chunk being stepped was due (paced)
         # lockstep: nothing past the first chunk runs before a GCS acks its first tick, so
@@ -118,12 +126,14 @@ class SimHost:
         self._endpoints = [  # before any receiver: frames may arrive at once
             VehicleEndpoint(self._autopilot, k, sysid=sysid, measurements=measurements,
                             send=functools.partial(self._send, k),
-                            signing_key=signing_keys.get(sysid))
+                            signing_key=signing_keys.get(sysid),
+                            reference=world_config.home.geodetic)
             for k, sysid in enumerate(self._sysids)]
         self._fabric = HostFabric(options.zenoh_settings(),
                                   fleet=options.fleet or cfg.gcs.fleet, sysids=self._sysids,
                                   inbox=self._inbox, on_frame=self._receive,
-                                  announce_sent=options.lockstep, refusals=self._refusals)
+                                  announce_sent=options.lockstep, refusals=self._refusals,
+                                  seal_key=_seal_key(team, signing=options.signing))
         try:
             if options.udp:
                 self._udp = UdpPorts(len(self._sysids), base_port=options.udp_base_port,
@@ -158,6 +168,10 @@ class SimHost:
             parts.append(f"lockstep {self._period:g} s")
         elif self._options.background:
             parts.append("background")
+        if self._options.separate_origins:
+            parts.append("separate origins")
+        if not self._signing_keys:
+            parts.append("UNSIGNED (--insecure: anyone who reaches a port commands the vehicles)")
         if self._udp is not None:
             ports = " ".join(f"{s}=127.0.0.1:{p}" for s, p in zip(self._sysids, self._udp.ports,
                                                                    strict=True))
@@ -199,6 +213,7 @@ class SimHost:
             if self._stopping:
                 break
             self._drain()
+            self._end_timed_faults()
             self._world.run(self._autopilot, CHUNK_S)
             self._after_chunk()
 
@@ -212,10 +227,11 @@ class SimHost:
         """Log each vehicle's link counters, then close zenoh and UDP; idempotent."""
         for k, endpoint in enumerate(self._endpoints):
             c = endpoint.counters()
-            _log.info("vehicle %d: %d frames, %d garbage bytes, %d dropped, %d not for it, "
-                      "%d oversize payloads, %d setpoints (%d refused), %d commands",
+            _log.info("vehicle %d: %d frames, %d garbage bytes, %d dropped (%d refused by "
+                      "signing), %d not for it, %d oversize payloads, %d setpoints (%d refused), "
+                      "%d commands",
                       endpoint.sysid, c.decode.frames, c.decode.garbage_bytes, c.decode.dropped,
-                      c.not_for_us, self._fabric.oversize(k),
+                      c.decode.refused_signature, c.not_for_us, self._fabric.oversize(k),
                       c.setpoints_accepted + c.setpoints_refused, c.setpoints_refused,
                       c.commands)
         summary = self._refusals.summary()
@@ -258,7 +274,19 @@ class SimHost:
             if self._next_truth <= t:
                 self._next_truth = t + TRUTH_PERIOD_S
             self._fabric.publish_truth(self._truth())
+            self._note_signature_refusals()
         self._fabric.publish_clock(t)  # last: a lockstep sample counts what went before
+
+    def _note_signature_refusals(self) -> None:
+        """Frames a vehicle refused by signing, as refused inputs (logged, counted)."""
+        for k, endpoint in enumerate(self._endpoints):
+            refused = endpoint.counters().decode.refused_signature
+            new = refused - self._signature_refused[k]
+            if new > 0:
+                self._signature_refused[k] = refused
+                self._refusals.refuse("MAVLink frame", f"vehicle {endpoint.sysid}: {new} not "
+                                      f"signed with the team key (unsigned, another key, or "
+                                      f"replayed)", count=new)
 
     def _truth(self) -> SimTruth:
         w = self._world
@@ -300,6 +328,13 @@ class SimHost:
         except ValueError as exc:
             self._refusals.refuse("control message", str(exc))
             return
+        if command.action is ControlAction.GUST:
+            assert command.wind_ned is not None and command.seconds is not None
+            self._gusts.append((self.t + command.seconds, np.array(command.wind_ned)))
+            self._set_wind()
+            _log.info("gust of %s m/s (NED) for %g s at t = %.3f s", command.wind_ned,
+                      command.seconds, self.t)
+            return
         if command.sysid not in self._sysids:
             self._refusals.refuse("control message", f"no vehicle {str(command.sysid)[:40]}")
             return
@@ -309,10 +344,35 @@ class SimHost:
             self._refusals.refuse("control message", f"vehicle {command.sysid} is dead")
             return
         self._status[k] = _NEXT_STATUS[command.action]
+        self._cut_until.pop(k, None)
+        if command.action is ControlAction.CUT and command.seconds is not None:
+            self._cut_until[k] = self.t + command.seconds
         if command.action is ControlAction.KILL:
             self._fabric.drop_vehicle(k)
             self._autopilot.disarm(k, force=True)
         _log.info("vehicle %d %s at t = %.3f s", command.sysid, command.action.text, self.t)
+
+    def _end_timed_faults(self) -> None:
+        """End the timed cuts and gusts whose time is up: at a chunk boundary of sim time,
+        so a lockstep run ends them at the same instant every time."""
+        t = self.t
+        for k, end in list(self._cut_until.items()):
+            if t >= end - _EPS:
+                del self._cut_until[k]
+                self._status[k] = VehicleStatus.LIVE
+                _log.info("vehicle %d restored at t = %.3f s (timed cut)", self._sysids[k], t)
+        if any(t >= end - _EPS for end, _ in self._gusts):
+            self._gusts = [(end, wind) for end, wind in self._gusts if t < end - _EPS]
+            self._set_wind()
+            _log.info("gust over at t = %.3f s", t)
+
+    def _set_wind(self) -> None:
+        """The world's mean wind: the configured one plus every gust blowing (the physics
+        kernel reads the array in place)."""
+        wind = self._wind_mean.copy()
+        for _, extra in self._gusts:
+            wind += extra
+        self._world.params.wind_mean[:] = wind
 
     def _receive(self, index: int, data: bytes, peer: tuple[str, int] | None = None) -> None:
         """A payload for vehicle ``index`` (receive threads): echo now, the rest to the loop."""
@@ -338,14 +398,27 @@ _NEXT_STATUS = {
 }
 
 
-def _signing_keys(team: Team) -> dict[int, SigningKey]:
-    """Each vehicle's signing key from the team file's ``links`` (paths relative to it)."""
+def _seal_key(team: Team, *, signing: bool) -> SigningKey | None:
+    """The team key that seals the clock, truth, acks and control (None: signing off)."""
+    settings = team.config.gcs
+    if not (signing and settings.signing):
+        return None
+    return ensure_team_key(team_key_path(settings, Path(team.source).parent))[0]
+
+
+def _signing_keys(team: Team, *, signing: bool) -> dict[int, SigningKey]:
+    """Each vehicle's signing key: the key file its link names, else the team key
+    (every simulated vehicle is signed unless ``signing`` or the team file says not)."""
     base = Path(team.source).parent
+    settings = team.config.gcs
+    if not signing:
+        settings = dataclasses.replace(settings, signing=False)
     out: dict[int, SigningKey] = {}
     for link in team.config.vehicle_links():
-        path = link.signing_key_path(base)
-        if path is not None:
-            out[link.sysid] = load_signing_key(path)
+        key = link_key(dataclasses.replace(link, profile="sim"), settings=settings,
+                       base_dir=base)
+        if key is not None:
+            out[link.sysid] = key
     return out
 
 

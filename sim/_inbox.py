@@ -97,14 +97,14 @@ class Refusals:
         self._unreported: Counter[str] = Counter()
         self._reported_at: dict[str, float] = {}
 
-    def refuse(self, kind: str, why: str) -> None:
-        """Count one refused ``kind`` of input; log it unless one was logged lately."""
+    def refuse(self, kind: str, why: str, count: int = 1) -> None:
+        """Count ``count`` refused inputs of ``kind``; log it unless one was logged lately."""
         now = self._wall()
         with self._lock:
-            self._counts[kind] += 1
+            self._counts[kind] += count
             last = self._reported_at.get(kind)
             if last is not None and now - last < REFUSAL_REPORT_PERIOD_S:
-                self._unreported[kind] += 1
+                self._unreported[kind] += count
                 return
             self._reported_at[kind] = now
             more = self._unreported.pop(kind, 0)

@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from gcs.transport import DEFAULT_ENDPOINT, ZenohSettings
+from gcs.transport import DEFAULT_ENDPOINT, TlsSettings, ZenohSettings
 from gcs.wire.keys import check_fleet
 from sim._udp import DEFAULT_BASE_PORT, DEFAULT_GCS_PORT
 
@@ -31,7 +31,8 @@ class HostOptions:
     udp: bool = False
     """Also open a plain MAVLink UDP port per vehicle."""
     udp_base_port: int = DEFAULT_BASE_PORT
-    """UDP port of the first vehicle; vehicle k uses base + k."""
+    """UDP port of the team's first vehicle; the one at 0-based team position k uses
+    base + k (the first on base itself)."""
     udp_gcs_port: int | None = DEFAULT_GCS_PORT
     """Ground-station port on 127.0.0.1 every vehicle sends to; None: only answer peers."""
     seed: int = 0
@@ -40,8 +41,17 @@ class HostOptions:
     """Stop after this much sim time, s; None: run until stopped."""
     fleet: str | None = None
     """Fleet name in the zenoh keys; None: the team file's ``gcs.loop._fleet``."""
+    signing: bool = True
+    """Sign every vehicle with the team key (or its link's key); False: ``--insecure``."""
+    separate_origins: bool = False
+    """Give each vehicle its own local origin at its start position, as a GPS autopilot sets
+    its EKF origin at its first fix (``--separate-origins``); False: one origin, the world's,
+    so every LOCAL_POSITION_NED is in one frame."""
     background: bool = False
     """Paced runs: step at background CPU priority while keeping up (:mod:`sim._priority`)."""
+    tls: str | None = None
+    """Folder of the team's certificates (``gcs certs``): zenoh over TLS with mutual
+    authentication as the ``sim`` role, peers held to theirs; None: plain TCP."""
 
     def __post_init__(self) -> None:
         if self.speed is not None and not (math.isfinite(self.speed) and self.speed > 0):
@@ -60,4 +70,5 @@ class HostOptions:
 
     def zenoh_settings(self) -> ZenohSettings:
         """Peer mode with these endpoints, multicast scouting off."""
-        return ZenohSettings(mode="peer", listen=self.listen, connect=self.connect)
+        tls = None if self.tls is None else TlsSettings(dir=self.tls, role="sim")
+        return ZenohSettings(mode="peer", listen=self.listen, connect=self.connect, tls=tls)

@@ -22,5 +22,5 @@ def team_layout(team: Team, *, ground_z_ned: float = 0.0) -> Layout:
     xy = np.asarray(team.formation.positions, dtype=np.float64)
     n = xy.shape[0]
     p0 = np.column_stack([xy, np.full(n, ground_z_ned)])
-    rope = np.full(n, float(team.config.payload.rope_length))
+    rope = np.array(team.config.payload.lengths(n), dtype=np.float64)
     return Layout(p0, rope, np.array([0.0, 0.0, ground_z_ned]))

@@ -3,14 +3,29 @@
 from __future__ import annotations
 
 import json
+import os
+import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
 
 SQUARE = "configs/bebop_square.yaml"
 SHORT = "configs/scenarios/short_flight.yaml"
+
+_CONFIG_HOME = tempfile.mkdtemp(prefix="gcs-tests-config-")
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """The suite's own user config directory: its team key (made on first use by the GCS
+    and the simulators the tests start, which inherit it) never touches the user's."""
+    os.environ["XDG_CONFIG_HOME"] = _CONFIG_HOME
+
+
+def pytest_unconfigure(config: pytest.Config) -> None:
+    shutil.rmtree(_CONFIG_HOME, ignore_errors=True)
 
 
 def run_gcs(*args: str, timeout: float = 300) -> subprocess.CompletedProcess[str]:

@@ -153,6 +153,16 @@ JSON_KEYS: dict[str, object] = {
         "lhs_m_s2": None, "rhs_m_s2": None, "ok": None},
     "configured_limits": {"accel_norm_m_s2": None, "accel_axis_m_s2": None},
     "safe_deformation": {"span_m": None, "margin_m": None},
+    "static_load": {"rope_lengths_m": None, "taut": None, "tension_N": None, "vertical_N": None,
+                    "horizontal_N": None, "share": None, "payload_offset_m": None,
+                    "hang_depth_m": None, "statically_determinate": None,
+                    "assumed_share": None, "worst_share": None, "worst_vehicle": None,
+                    "position_error_m": None, "hold_stiffness_N_m": None,
+                    "worst_tension_N": None, "worst_horizontal_N": None,
+                    "worst_vertical_load_N": None, "design_share": None,
+                    "even_rope_lengths_m": None},
+    "largest_payload_kg": None,
+    "lift": {"altitude_m": None, "ceiling_m": None},
     "violations": None, "warnings": None, "ok": None,
 }
 VIOLATION_KEYS = ["term", "message", "fixes"]

@@ -12,7 +12,7 @@ import pytest
 from gcs.cli import main
 from tests.conftest import run_gcs
 
-COMMANDS = {"analyze", "sim", "run", "demo", "fly", "replay", "report"}
+COMMANDS = {"analyze", "sim", "run", "demo", "fly", "replay", "report", "key", "certs"}
 
 
 def listed(help_text: str) -> set[str]:
@@ -67,3 +67,27 @@ def test_the_gamepad_help_names_both_default_mappings(command: str,
         main([command, "--help"])
     text = " ".join(capsys.readouterr().out.split())
     assert "configs/gamepad.yaml in the current directory, else the shipped one" in text, text
+
+
+
+def test_a_simulator_that_cannot_start_is_one_line(monkeypatch: pytest.MonkeyPatch,
+                                                   capsys: pytest.CaptureFixture[str]) -> None:
+    """A simulator that dies before it is ready was a SimStartError traceback from
+    ``gcs fly``, ``gcs demo``: now one line and exit 1. Here a real simulator process
+    refuses an option, inside the command's own flight function."""
+    import gcs.app
+    from gcs.app import SimProcess, free_tcp_port
+    from gcs.cli import main
+
+    def fly(team: object, *args: object, **kwargs: object) -> None:
+        SimProcess("configs/bebop_square.yaml", endpoint=f"tcp/127.0.0.1:{free_tcp_port()}",
+                   extra=("--no-such-option",))
+
+    monkeypatch.setattr(gcs.app, "fly", fly)
+    code = main(["fly", "--config", "configs/bebop_square.yaml", "--scenario",
+                 "configs/scenarios/short_flight.yaml"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 1
+    assert len(err) == 1 and err[0].startswith("gcs fly: error: the simulator exited before "
+                                               "it was ready: "), err
+    assert "--no-such-option" in err[0]

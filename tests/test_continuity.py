@@ -11,15 +11,17 @@ without setpoints (time is the subject there).
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import threading
 import time
 from collections.abc import Callable
 
 import numpy as np
+import pytest
 
 from gcs.app import GcsApp, SimProcess, free_tcp_port
-from gcs.app._scenario import Scenario, Step, play
+from gcs.app._scenario import Scenario, ScenarioError, Step, play
 from gcs.config import Team, load_team
 from gcs.loop import FleetState, Phase, RuntimeSnapshot
 from gcs.loop._runtime import HOLD_KP, HOLD_KV
@@ -167,17 +169,23 @@ def test_positions_that_disagree_with_the_shape_hold_the_team_instead_of_tearing
                    for t in texts(app))
 
 
-def test_a_start_out_of_shape_holds_at_hover_and_says_why() -> None:
-    """Vehicle 1 seen 1.4 m out of place from the start (its own origin): the team takes
-    off and holds at hover, each vehicle on its own point; the real shape does not drift."""
+def test_a_start_out_of_shape_is_not_armed_and_one_seen_once_armed_holds_at_hover() -> None:
+    """Vehicle 1 seen 1.4 m out of place from the start (its own origin): the arm is refused,
+    naming it (the checks before arming). Seen so only once armed, the team takes off and
+    holds at hover, each vehicle on its own point; the real shape does not drift."""
     endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
     with SimProcess(TEAM.source, endpoint=endpoint, speed="max", lockstep=True), \
             GcsApp(TEAM, zenoh_settings=ZenohSettings(connect=(endpoint,)), sim_clock=True,
                    lockstep=True) as app:
-        shifted(app, lambda _t: 1.4)
+        shift = [1.4]
+        shifted(app, lambda _t: shift[0])
         app.start()
-        play(Scenario(name="up", steps=(Step(action="arm"), Step(action="takeoff"))),
-             app.runtime, app.clock)
+        with pytest.raises(ScenarioError, match=r"vehicle 1: 1\.40 m from its place"):
+            play(Scenario(name="arm", steps=(Step(action="arm"),)), app.runtime, app.clock)
+        shift[0] = 0.0
+        play(Scenario(name="arm", steps=(Step(action="arm"),)), app.runtime, app.clock)
+        shift[0] = 1.4
+        play(Scenario(name="up", steps=(Step(action="takeoff"),)), app.runtime, app.clock)
         worst: list[float] = []
         fly_sticks(app, 10.0, each=lambda s: worst.append(true_errors(s)))
         snap = app.runtime.snapshot
@@ -241,3 +249,41 @@ def test_a_loop_stall_leaves_no_vehicle_without_setpoints() -> None:
         assert stats.setpoint_gap_max < 0.5, stats
         assert modes == {OFFBOARD}, modes
         assert any(t.startswith("loop stalled: tick ") for t in texts(app))
+
+
+def test_a_frozen_simulator_ends_a_scripted_flight_with_the_reason() -> None:
+    """A lockstep simulator that stops (here SIGSTOP, as a hung process) used to leave
+    ``gcs fly`` waiting at the step gate for ever: the loop had ended on the stopped clock,
+    and no tick ever came to release the scenario. Now it ends with the clock's reason."""
+    import json
+    import os
+    import signal
+    import subprocess
+    import sys
+
+    proc = subprocess.Popen([sys.executable, "-m", "gcs", "fly", "--config",
+                             "configs/bebop_square.yaml", "--scenario",
+                             "configs/scenarios/short_flight.yaml", "--json"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    sim_pid = None
+    try:
+        assert proc.stderr is not None
+        for line in proc.stderr:  # frozen in flight: after the take-off began
+            if "step 2/8" in line:
+                break
+        children = subprocess.run(["pgrep", "-P", str(proc.pid)], capture_output=True,
+                                  text=True, check=False).stdout.split()
+        assert len(children) == 1, children
+        sim_pid = int(children[0])
+        os.kill(sim_pid, signal.SIGSTOP)
+        out, _ = proc.communicate(timeout=180)  # a 15 s clock timeout, on a busy machine
+        result = json.loads(out.splitlines()[-1])
+        assert proc.returncode == 1 and not result["completed"]
+        assert "no simulator clock sample" in result["error"], result["error"]
+    finally:
+        if sim_pid is not None:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(sim_pid, signal.SIGCONT)
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()

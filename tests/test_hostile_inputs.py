@@ -23,19 +23,23 @@ from dataclasses import dataclass
 
 import pytest
 import zenoh
-from pymavlink import mavutil
 
 import gcs.transport as transport
 import gcs.wire as wire
 from gcs.app import GcsApp, SimProcess, free_tcp_port
 from gcs.config import load_team
+from gcs.link import Link
 from gcs.loop import ExternalClock
+from gcs.testing import signed_connection, team_key
 from gcs.transport import FleetReceiver, ZenohSettings, ZenohTransport, open_session
 from gcs.wire import (
+    SEAL_OVERHEAD,
     FrameDecoder,
     MavlinkEncoder,
+    Sealer,
     SimTruth,
     TelemetryStore,
+    Unsealer,
     decode_clock,
     encode_clock,
     encode_time,
@@ -43,7 +47,7 @@ from gcs.wire import (
     mavlink,
 )
 from gcs.wire._setpoints import accel_setpoint_message
-from sim._faults import ControlAction, ControlCommand, parse_control
+from sim._faults import CONTROL_MAX_BYTES, ControlAction, ControlCommand, parse_control
 
 TEAM = load_team("configs/bebop_square.yaml")
 NESTED = b'{"a":' * 100_000
@@ -187,35 +191,45 @@ def test_forged_clock_samples_are_refused_and_counted(gcs_on_clock: GcsOnClock,
                                                       capfd: pytest.CaptureFixture[str]) -> None:
     app, fleet = gcs_on_clock.app, gcs_on_clock.fleet
     pub = publisher(gcs_on_clock.session, keys.clock(fleet))
+    seal = Sealer(team_key(), keys.clock(fleet)).seal  # the simulator's own seal
     time.sleep(0.5)  # the subscriber is matched
-    pub.put(encode_time(30.0))
+    pub.put(seal(encode_time(30.0)))
     eventually(lambda: app.clock.now() == 30.0, "the first clock sample")
-    pub.put(encode_time(1e9))            # 31 years ahead
-    pub.put(encode_time(29.0))           # backwards
-    pub.put(encode_time(30.0) + b"x")    # malformed
+    pub.put(encode_time(1e9))            # a stranger's, 31 years ahead: not sealed
+    pub.put(encode_time(30.5))           # a stranger's, plausible: not sealed either
+    ahead = seal(encode_time(1e9))       # sealed, and still 31 years ahead: the guard
+    pub.put(ahead)
+    pub.put(seal(encode_time(29.0)))     # backwards
+    pub.put(seal(encode_time(30.0) + b"x"))    # malformed
     pub.put(encode_time(30.0) + bytes(4) + bytes(5 * 100_000))  # oversize
-    pub.put(encode_time(30.0 + 1 / 128))
+    pub.put(ahead)                       # replayed
+    pub.put(seal(encode_time(30.0 + 1 / 128)))
     eventually(lambda: app.clock.now() == 30.0 + 1 / 128, "the next real sample")
-    assert app.clock_refused == 2 and app.clock_errors == 2
+    assert app.clock_refused == 5 and app.clock_errors == 2
     notes = [e.text for e in app.loop.events() if "clock sample" in e.text]
-    assert notes and "1e+09" in notes[0], notes
+    assert notes and "not sealed with the team key" in notes[0], notes
     assert "Traceback" not in capfd.readouterr().err
 
 
-def test_malformed_truth_is_refused_and_counted(gcs_on_clock: GcsOnClock,
-                                                capfd: pytest.CaptureFixture[str]) -> None:
+def test_malformed_or_unsealed_truth_is_refused_and_counted(
+        gcs_on_clock: GcsOnClock, capfd: pytest.CaptureFixture[str]) -> None:
     app, fleet = gcs_on_clock.app, gcs_on_clock.fleet
     pub = publisher(gcs_on_clock.session, keys.sim(fleet, "truth"))
+    seal = Sealer(team_key(), keys.sim(fleet, "truth")).seal
     time.sleep(0.5)
     good = SimTruth(t=1.0, ids=(1,), vehicle_p_ned=((0.0, 0.0, -1.0),),
                     payload_p_ned=(0.0, 0.0, 0.0), payload_v_ned=(0.0, 0.0, 0.0),
                     rope_tension=(1.0,))
-    for bad in (NESTED, b"\xfd" * 1_000_000,
-                good.to_bytes().replace(b'"ids": [1]', b'"ids": [1e999]')):
+    forged = SimTruth(t=1.0, ids=(1,), vehicle_p_ned=((5.0, 0.0, -1.0),),
+                      payload_p_ned=(0.0, 0.0, 0.0), payload_v_ned=(0.0, 0.0, 0.0),
+                      rope_tension=(1.0,))
+    for bad in (seal(NESTED), b"\xfd" * 1_000_000,
+                seal(good.to_bytes().replace(b'"ids": [1]', b'"ids": [1e999]')),
+                forged.to_bytes()):  # well formed, but a stranger's
         pub.put(bad)
-    pub.put(good.to_bytes())
+    pub.put(seal(good.to_bytes()))
     eventually(lambda: app.truth == good, "the good truth sample")
-    assert app.truth_errors == 3
+    assert app.truth_errors == 4
     assert "Traceback" not in capfd.readouterr().err
 
 
@@ -264,16 +278,24 @@ def test_the_gcs_drops_oversize_frame_payloads_cheaply_and_counts_them() -> None
         got: list[bytes] = []
         link = ZenohTransport.for_gcs(gcs, fleet="hostile", sysid=1, receiver=receiver)
         link.start(got.append)
+        other = Link(2, ZenohTransport.for_gcs(gcs, fleet="hostile", sysid=2, receiver=receiver),
+                     gcs_heartbeat_period_s=0.0, timesync_period_s=0.0).start()
         pub = publisher(vehicle, keys.mavlink("hostile", 1, keys.Direction.FROM_VEHICLE))
+        pub2 = publisher(vehicle, keys.mavlink("hostile", 2, keys.Direction.FROM_VEHICLE))
         time.sleep(0.5)
         start = time.monotonic()
         for _ in range(3):
             pub.put(FLOOD)
         pub.put(b"\xfd\x00")
+        pub2.put(FLOOD)
         eventually(lambda: got == [b"\xfd\x00"], "the small payload")
+        eventually(lambda: other.health.refused_oversize == 1, "vehicle 2's oversize payload")
         assert time.monotonic() - start < 2.0
-        assert receiver.oversize == 3
+        assert receiver.oversize == 4
+        assert link.oversize == 3  # counted per vehicle: the page's refused column shows it
+        assert other.health.refused == 1
         assert transport.MAVLINK_PAYLOAD_MAX >= 65_535
+        other.close()
         link.close()
         receiver.close()
     finally:
@@ -327,8 +349,9 @@ def running_sim() -> Iterator[RunningSim]:
         pytest.fail("no free ports for the sim")
     session = open_session(ZenohSettings(connect=(endpoint,)))
     clock: list[tuple[float, float]] = []
+    unseal = Unsealer(team_key(), keys.clock(fleet)).open
     sub = session.declare_subscriber(keys.clock(fleet), lambda s: clock.append(
-        (time.monotonic(), decode_clock(s.payload.to_bytes()).t)))
+        (time.monotonic(), decode_clock(unseal(s.payload.to_bytes())).t)))
     try:
         eventually(lambda: len(clock) > 10, "the sim clock", 20.0)
         yield RunningSim(sim, session, fleet, base, clock)
@@ -366,15 +389,19 @@ def test_the_sim_survives_nested_json_on_its_control_key(running_sim: RunningSim
                                                  str(s.key_expr)) or 0), history=True)
     try:
         eventually(lambda: 4 in alive, "vehicle 4's token")
-        control.put(ControlCommand(ControlAction.KILL, 4).to_bytes())
+        control.put(ControlCommand(ControlAction.KILL, 4).to_bytes())  # a stranger's
+        time.sleep(1.0)
+        assert 4 in alive, "a stranger's unsealed control message killed vehicle 4"
+        control.put(Sealer(team_key(), keys.sim(rs.fleet, "control")).seal(
+            ControlCommand(ControlAction.KILL, 4).to_bytes()))
         eventually(lambda: 4 not in alive, "vehicle 4 killed")
     finally:
         watcher.undeclare()
         control.undeclare()
     # logged once, not once per message: a flood of junk is not a flood on stderr
     refused = [line for line in rs.sim.stderr_tail if "ignored control message" in line]
-    assert refused == ["sim: ignored control message: 500000 bytes, more than 1024"], \
-        rs.sim.stderr_tail
+    assert refused == [f"sim: ignored control message: 500000 bytes, more than "
+                       f"{CONTROL_MAX_BYTES + SEAL_OVERHEAD}"], rs.sim.stderr_tail
 
 
 def test_the_sim_keeps_real_time_under_a_flood_of_oversize_payloads(
@@ -418,8 +445,8 @@ def test_the_sim_survives_random_udp_datagrams_and_still_answers(running_sim: Ru
             if k % 200 == 0:
                 time.sleep(0.01)  # a socket buffer's worth at a time
     assert rs.sim.alive(), rs.sim.stderr_tail
-    conn = mavutil.mavlink_connection(f"udpout:127.0.0.1:{port}", source_system=GCS_SYSID,
-                                      source_component=190)
+    conn = signed_connection(f"udpout:127.0.0.1:{port}", source_system=GCS_SYSID,
+                             source_component=190)
     try:
         echo = ack = None
         deadline = time.monotonic() + 10.0

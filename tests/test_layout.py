@@ -164,7 +164,7 @@ LAYERS = {
     "gcs.loop": 6,
     "gcs.flightlog": 7,
     "gcs.app": 8,
-    "gcs.testing": 8,
+    "gcs.testing": 9,  # SimTeam flies on gcs.app
     "web": 9,
     "gcs.cli": 10,
 }

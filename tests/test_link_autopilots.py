@@ -1,24 +1,23 @@
 """Autopilot profiles and commands against a scripted autopilot on UDP loopback.
 
-The autopilot is a thread speaking MAVLink 2 through ``pymavlink.mavutil``,
-as a real PX4 or ArduPilot on a UDP port would. It answers commands, streams
-HEARTBEAT and LOCAL_POSITION_NED, enforces the rules each autopilot imposes
-(refusing what the real one would refuse) and records every violation of the
+The autopilot (:mod:`tests.scripted_autopilot`) is a thread speaking MAVLink 2
+through ``pymavlink.mavutil``, as a real PX4 or ArduPilot on a UDP port would,
+refusing what the real one would refuse and recording every violation of the
 expected sequence, which the tests then require to be empty.
 """
 
 from __future__ import annotations
 
-import itertools
+import logging
 import math
+import re
+import socket
 import threading
 import time
 from collections.abc import Iterator
-from dataclasses import dataclass
 from typing import Any
 
 import pytest
-from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as v20
 
 from gcs.config import LinkConfig
@@ -27,290 +26,29 @@ from gcs.link._link import DEFAULT_TELEMETRY_RATES_HZ
 from gcs.link._profile_ardupilot import ArduPilotProfile
 from gcs.link._profile_px4 import Px4Profile
 from gcs.link._profile_sim import SimProfile
+from gcs.testing import team_key
 from gcs.transport import MavutilTransport
 from gcs.wire import (
     CommandResult,
     CopterMode,
     LocalPosition,
-    Px4AutoSubMode,
     Px4MainMode,
     SigningKey,
     SimMode,
 )
-from gcs.wire._modes import px4_custom_mode
 from gcs.wire._setpoints import MASK_ACCEL, MASK_ACCEL_XY_POS_Z
-
-GCS_SYSID = 245
-VEHICLE = 1
-ARM = v20.MAV_CMD_COMPONENT_ARM_DISARM
-SET_MODE = v20.MAV_CMD_DO_SET_MODE
-TAKEOFF = v20.MAV_CMD_NAV_TAKEOFF
-LAND = v20.MAV_CMD_NAV_LAND
-AUTOPILOT = {"px4": v20.MAV_AUTOPILOT_PX4, "ardupilot": v20.MAV_AUTOPILOT_ARDUPILOTMEGA,
-             "sim": v20.MAV_AUTOPILOT_GENERIC}
-INITIAL_MODE = {"px4": px4_custom_mode(Px4MainMode.POSCTL), "ardupilot": CopterMode.STABILIZE,
-                "sim": SimMode.DISARMED}
-
-
-@dataclass
-class Received:
-    """One message the autopilot got from the GCS."""
-
-    t: float
-    msg: Any
-
-
-@dataclass
-class InProgress:
-    """Script entry: answer IN_PROGRESS now and ``final`` after ``delay_s``."""
-
-    delay_s: float
-    final: int
-
-
-DROP = None
-"""Script entry: do not answer this copy of the command."""
-
-
-class ScriptedAutopilot(threading.Thread):
-    """Plays a PX4, ArduPilot or simulated autopilot over a mavutil UDP connection."""
-
-    def __init__(self, kind: str, gcs_port: int, *, script: dict[int, list[Any]] | None = None,
-                 signing_key: SigningKey | None = None, z_ned: float = 0.0,
-                 position_rate_hz: float = 20.0, flies: bool = False) -> None:
-        super().__init__(daemon=True, name=f"scripted-{kind}")
-        self.kind = kind
-        self.conn = mavutil.mavlink_connection(f"udpout:127.0.0.1:{gcs_port}",
-                                               source_system=VEHICLE, source_component=1)
-        # Speak MAVLink 2 from the first frame, whatever mavutil's global dialect is.
-        self.conn.mav = v20.MAVLink(self.conn, srcSystem=VEHICLE, srcComponent=1)
-        self.conn.mav.robust_parsing = True
-        self.conn.WIRE_PROTOCOL_VERSION = "2.0"
-        self.conn.first_byte = False
-        if signing_key is not None:
-            self.conn.setup_signing(signing_key.secret, sign_outgoing=True, link_id=7)
-        self.script = {k: list(v) for k, v in (script or {}).items()}
-        self.lock = threading.Lock()
-        self.received: list[Received] = []
-        self.violations: list[str] = []
-        self.bad_frames = 0
-        self.armed = False
-        self.custom_mode = int(INITIAL_MODE[kind])
-        self.z_ned = z_ned
-        self.vz_ned = 0.0
-        self.position_period_s = 1.0 / position_rate_hz
-        """LOCAL_POSITION_NED period, s; SET_MESSAGE_INTERVAL changes it."""
-        self.flies = flies
-        """ArduPilot: armed in GUIDED, z follows the last setpoint's afz (z'' = afz) until
-        GUID_TIMEOUT (3 s); else z jumps to the take-off altitude."""
-        self._afz: tuple[float, float] | None = None  # (time, afz) of the last setpoint
-        self._later: list[tuple[float, int, int]] = []
-        self._quit = threading.Event()
-        self._offboard_since: float | None = None
-
-    # -- test-side queries ------------------------------------------------------------------
-
-    def commands(self, command: int | None = None) -> list[Received]:
-        with self.lock:
-            return [r for r in self.received if r.msg.get_type() == "COMMAND_LONG"
-                    and (command is None or r.msg.command == command)]
-
-    def setpoints(self) -> list[Received]:
-        with self.lock:
-            return [r for r in self.received
-                    if r.msg.get_type() == "SET_POSITION_TARGET_LOCAL_NED"]
-
-    def stop(self) -> None:
-        self._quit.set()
-        self.join(timeout=2.0)
-        self.conn.close()
-
-    # -- the autopilot ------------------------------------------------------------------------
-
-    def run(self) -> None:
-        next_beat = next_position = 0.0
-        last = time.monotonic()
-        while not self._quit.is_set():
-            now = time.monotonic()
-            self._fly(now - last, now)
-            last = now
-            if now >= next_beat:
-                self._heartbeat()
-                next_beat = now + 0.05
-            if now >= next_position:  # on a fixed grid: the rate holds whatever the delays
-                self._position()
-                next_position = max(next_position + self.position_period_s, now - 0.1)
-            for item in [x for x in self._later if x[0] <= now]:
-                self._later.remove(item)
-                self._ack(item[1], item[2])
-            msg = self.conn.recv_match(blocking=True, timeout=0.01)
-            if msg is None:
-                continue
-            if msg.get_type() == "BAD_DATA":
-                self.bad_frames += 1
-                continue
-            if msg.get_srcSystem() != GCS_SYSID:
-                self._violation(f"frame from system {msg.get_srcSystem()}, not the GCS")
-                continue
-            if self.conn.mav.signing.secret_key is not None and not msg.get_signed():
-                self._violation(f"unsigned {msg.get_type()} on a signed link")
-            with self.lock:
-                self.received.append(Received(time.monotonic(), msg))
-            if msg.get_type() == "COMMAND_LONG":
-                self._command(msg)
-            elif msg.get_type() == "SET_POSITION_TARGET_LOCAL_NED":
-                self._setpoint(msg)
-            self._check_offboard_stream()
-
-    def _heartbeat(self) -> None:
-        base = v20.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | (
-            v20.MAV_MODE_FLAG_SAFETY_ARMED if self.armed else 0)
-        self.conn.mav.heartbeat_send(v20.MAV_TYPE_QUADROTOR, AUTOPILOT[self.kind], base,
-                                     self.custom_mode, v20.MAV_STATE_ACTIVE)
-
-    def _position(self) -> None:
-        self.conn.mav.local_position_ned_send(int(time.monotonic() * 1000) & 0xFFFFFFFF,
-                                              0.0, 0.0, self.z_ned, 0.0, 0.0, self.vz_ned)
-
-    def _fly(self, dt: float, now: float) -> None:
-        """Vertical double integrator driven by afz, as a GUIDED copter given acceleration."""
-        if not (self.flies and self.armed and self.custom_mode == CopterMode.GUIDED):
-            return
-        az = self._afz[1] if self._afz is not None and now - self._afz[0] < 3.0 else 0.0
-        self.z_ned += self.vz_ned * dt + 0.5 * az * dt * dt
-        self.vz_ned += az * dt
-
-    def _interval(self, msg: Any) -> int:
-        """SET_MESSAGE_INTERVAL: LOCAL_POSITION_NED's rate is honoured, the rest accepted."""
-        if int(msg.param1) == v20.MAVLINK_MSG_ID_LOCAL_POSITION_NED and msg.param2 > 0:
-            self.position_period_s = msg.param2 / 1e6
-        return v20.MAV_RESULT_ACCEPTED
-
-    def _violation(self, text: str) -> None:
-        with self.lock:
-            self.violations.append(text)
-
-    def _ack(self, command: int, result: int) -> None:
-        self.conn.mav.command_ack_send(command, result, 0, 0, GCS_SYSID, 190)
-
-    def _command(self, msg: Any) -> None:
-        queue = self.script.get(msg.command)
-        if queue:
-            entry = queue.pop(0)
-            if entry is DROP:
-                return
-            if entry == v20.MAV_RESULT_ACCEPTED and msg.command == \
-                    v20.MAV_CMD_SET_MESSAGE_INTERVAL:
-                self._interval(msg)
-            if isinstance(entry, InProgress):
-                self._ack(msg.command, v20.MAV_RESULT_IN_PROGRESS)
-                self._later.append((time.monotonic() + entry.delay_s, msg.command, entry.final))
-                return
-            self._ack(msg.command, entry)
-            return
-        result = getattr(self, f"_{self.kind}_command")(msg)
-        self._ack(msg.command, result)
-
-    # PX4: OFFBOARD only after >= 1 s of setpoints above 2 Hz.
-    def _px4_command(self, msg: Any) -> int:
-        if msg.command == SET_MODE:
-            main, sub = int(msg.param2), int(msg.param3)
-            if not int(msg.param1) & v20.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED:
-                self._violation("DO_SET_MODE without the custom-mode flag")
-                return v20.MAV_RESULT_DENIED
-            if main == Px4MainMode.OFFBOARD:
-                times = [r.t for r in self.setpoints()]
-                now = time.monotonic()
-                recent = [t for t in times if t >= now - 1.0]
-                gaps = [b - a for a, b in itertools.pairwise(recent)]
-                if not times or now - times[0] < 1.0 or len(recent) < 2 or max(gaps) > 0.5:
-                    self._violation("OFFBOARD requested before 1 s of setpoints above 2 Hz")
-                    return v20.MAV_RESULT_DENIED
-                self._offboard_since = now
-            self.custom_mode = px4_custom_mode(Px4MainMode(main),
-                                               Px4AutoSubMode(sub) if sub else None)
-            return v20.MAV_RESULT_ACCEPTED
-        if msg.command == ARM:
-            self.armed = msg.param1 == 1.0
-            if self.armed and self._offboard_since is not None:
-                self.z_ned = -1.5  # climbs to the streamed z
-            return v20.MAV_RESULT_ACCEPTED
-        if msg.command == LAND:
-            self.custom_mode = px4_custom_mode(Px4MainMode.AUTO, Px4AutoSubMode.LAND)
-            self._offboard_since = None
-            return v20.MAV_RESULT_ACCEPTED
-        if msg.command == v20.MAV_CMD_SET_MESSAGE_INTERVAL:
-            return self._interval(msg)
-        return v20.MAV_RESULT_UNSUPPORTED
-
-    # ArduCopter: GUIDED before arming and take-off; take-off only when armed.
-    def _ardupilot_command(self, msg: Any) -> int:
-        if msg.command == SET_MODE:
-            self.custom_mode = int(msg.param2)
-            return v20.MAV_RESULT_ACCEPTED
-        if msg.command == ARM:
-            if msg.param1 == 1.0 and self.custom_mode != CopterMode.GUIDED:
-                self._violation("arm requested outside GUIDED")
-                return v20.MAV_RESULT_DENIED
-            self.armed = msg.param1 == 1.0
-            return v20.MAV_RESULT_ACCEPTED
-        if msg.command == TAKEOFF:
-            if self.custom_mode != CopterMode.GUIDED or not self.armed:
-                self._violation("take-off requested unarmed or outside GUIDED")
-                return v20.MAV_RESULT_DENIED
-            self.z_ned = -msg.param7
-            return v20.MAV_RESULT_ACCEPTED
-        if msg.command == v20.MAV_CMD_SET_MESSAGE_INTERVAL:
-            return self._interval(msg)
-        return v20.MAV_RESULT_UNSUPPORTED
-
-    # Simulated vehicles: modes of gcs.wire._modes.SimMode.
-    def _sim_command(self, msg: Any) -> int:
-        if msg.command == ARM:
-            self.armed = msg.param1 == 1.0
-            self.custom_mode = SimMode.DISARMED
-            return v20.MAV_RESULT_ACCEPTED
-        if msg.command == TAKEOFF:
-            if not self.armed or msg.param7 <= 0:
-                self._violation("take-off unarmed or without altitude")
-                return v20.MAV_RESULT_DENIED
-            self.custom_mode = SimMode.TAKEOFF
-            self.z_ned = -msg.param7
-            return v20.MAV_RESULT_ACCEPTED
-        if msg.command == SET_MODE:
-            sp = self.setpoints()
-            if int(msg.param2) == SimMode.OFFBOARD and (
-                    not sp or time.monotonic() - sp[-1].t > 0.5):
-                self._violation("OFFBOARD without a fresh setpoint")
-                return v20.MAV_RESULT_DENIED
-            self.custom_mode = int(msg.param2)
-            return v20.MAV_RESULT_ACCEPTED
-        if msg.command == LAND:
-            self.custom_mode = SimMode.LAND
-            return v20.MAV_RESULT_ACCEPTED
-        return v20.MAV_RESULT_UNSUPPORTED
-
-    def _setpoint(self, msg: Any) -> None:
-        if msg.coordinate_frame != v20.MAV_FRAME_LOCAL_NED:
-            self._violation(f"setpoint frame {msg.coordinate_frame}")
-        if self.kind in ("px4", "sim") and msg.type_mask != MASK_ACCEL_XY_POS_Z:
-            self._violation(f"type_mask {msg.type_mask} is not x/y acceleration + z position")
-        if self.kind == "ardupilot":
-            if self.custom_mode != CopterMode.GUIDED:
-                self._violation("setpoint outside GUIDED")
-            for group in (0x7, 0x38, 0x1C0):  # ArduCopter: each group all axes or none
-                if msg.type_mask & group not in (0, group):
-                    self._violation(f"type_mask {msg.type_mask} splits a group")
-            if msg.type_mask != MASK_ACCEL:
-                self._violation(f"type_mask {msg.type_mask} is not acceleration only")
-            self._afz = (time.monotonic(), msg.afz)
-
-    def _check_offboard_stream(self) -> None:
-        if self.kind != "px4" or self._offboard_since is None:
-            return
-        times = [r.t for r in self.setpoints()]
-        if len(times) >= 2 and times[-1] - times[-2] > 0.9:  # COM_OF_LOSS_T is 1 s
-            self._violation(f"setpoint gap of {times[-1] - times[-2]:.2f} s in OFFBOARD")
+from tests.scripted_autopilot import (
+    ARM,
+    DROP,
+    GCS_SYSID,
+    LAND,
+    SET_MODE,
+    TAKEOFF,
+    VEHICLE,
+    InProgress,
+    first_time,
+    start_peer,
+)
 
 
 @pytest.fixture
@@ -320,23 +58,6 @@ def udp_link() -> Iterator[Link]:
                 command_retries=2, gcs_heartbeat_period_s=0.2, timesync_period_s=0.0)
     with link:
         yield link
-
-
-def start_peer(link: Link, kind: str, **options: Any) -> ScriptedAutopilot:
-    assert isinstance(link.transport, MavutilTransport)
-    address = link.transport.local_address
-    assert address is not None
-    port = address[1]
-    peer = ScriptedAutopilot(kind, port, **options)
-    peer.start()
-    link.wait_for(lambda t: t.heartbeat is not None and t.position is not None,
-                  timeout_s=5.0, what="first telemetry")
-    return peer
-
-
-def first_time(records: list[Received]) -> float:
-    assert records, "expected at least one message"
-    return records[0].t
 
 
 def test_px4_streams_a_second_of_setpoints_then_offboard_then_arm(udp_link: Link) -> None:
@@ -472,7 +193,8 @@ def test_ardupilot_position_setpoints_stop_when_the_copter_leaves_guided(udp_lin
 
 @pytest.mark.parametrize(("kind", "script", "note"), [
     ("ardupilot", {}, ("info", "vehicle 1: telemetry rates set for LOCAL_POSITION_NED, "
-                               "ATTITUDE, SYS_STATUS")),
+                               "ATTITUDE, SYS_STATUS, GLOBAL_POSITION_INT, GPS_GLOBAL_ORIGIN, "
+                               "HOME_POSITION")),
     ("px4", {v20.MAV_CMD_SET_MESSAGE_INTERVAL: [
         v20.MAV_RESULT_ACCEPTED, v20.MAV_RESULT_UNSUPPORTED, DROP]},
      ("warning", "vehicle 1: telemetry rate not set for ATTITUDE (UNSUPPORTED), SYS_STATUS "
@@ -494,7 +216,9 @@ def test_manager_asks_a_real_autopilot_for_the_telemetry_the_gcs_reads(
         link = manager.links[VEHICLE]
         link.add_record_listener(lambda r: positions.append(time.monotonic())
                                  if isinstance(r, LocalPosition) else None)
-        peer = start_peer(link, kind, script=script, position_rate_hz=2.0)
+        # a simulated vehicle's link is signed with the team key: so is the peer playing it
+        peer = start_peer(link, kind, script=script, position_rate_hz=2.0,
+                          signing_key=team_key() if kind == "sim" else None)
         try:
             noted.wait(3.0)
             time.sleep(0.5)
@@ -510,9 +234,13 @@ def test_manager_asks_a_real_autopilot_for_the_telemetry_the_gcs_reads(
         return
     assert notes == [note]
     # one attempt each (an unanswered request must not hold the command lock for long)
+    # and what ties its local frame to the team frame (recorded in the .tlog too)
     assert asked == [(v20.MAVLINK_MSG_ID_LOCAL_POSITION_NED, 50_000.0),
                      (v20.MAVLINK_MSG_ID_ATTITUDE, 50_000.0),
-                     (v20.MAVLINK_MSG_ID_SYS_STATUS, 1_000_000.0)]
+                     (v20.MAVLINK_MSG_ID_SYS_STATUS, 1_000_000.0),
+                     (v20.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, 200_000.0),
+                     (v20.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN, 2_000_000.0),
+                     (v20.MAVLINK_MSG_ID_HOME_POSITION, 2_000_000.0)]
     assert peer.position_period_s == pytest.approx(0.05)
     assert rate > 8.0  # was 2 Hz before the request (20 Hz asked; loose for a busy machine)
 
@@ -540,14 +268,14 @@ def test_a_rebooted_autopilot_is_asked_for_its_rates_again() -> None:
                 time.sleep(0.05)
             time.sleep(0.2)  # the manager's check loop sees it gone
     assert notes == ["vehicle 1: telemetry rates set for LOCAL_POSITION_NED, ATTITUDE, "
-                     "SYS_STATUS"] * 2
+                     "SYS_STATUS, GLOBAL_POSITION_INT, GPS_GLOBAL_ORIGIN, HOME_POSITION"] * 2
 
 
 def test_ardupilot_peer_refuses_arming_outside_guided(udp_link: Link) -> None:
     peer = start_peer(udp_link, "ardupilot")
     try:
         with pytest.raises(CommandError) as info:
-            ArduPilotProfile(udp_link).arm()
+            udp_link.command_long(ARM, (1.0,))
     finally:
         peer.stop()
     err = info.value
@@ -555,6 +283,49 @@ def test_ardupilot_peer_refuses_arming_outside_guided(udp_link: Link) -> None:
     assert "vehicle 1" in str(err) and "MAV_CMD_COMPONENT_ARM_DISARM" in str(err)
     assert "DENIED" in str(err)
     assert len(peer.commands(ARM)) == 1  # a refusal is final: no retry
+
+
+def test_ardupilot_arms_in_guided_and_takes_off_right_after(udp_link: Link) -> None:
+    """The GCS's arm switches a copter in STABILIZE to GUIDED first (armed in STABILIZE, the
+    copters flew their first seconds on the pilot's sticks); the take-off then sends only
+    NAV_TAKEOFF, at once."""
+    peer = start_peer(udp_link, "ardupilot")
+    try:
+        profile = ArduPilotProfile(udp_link)
+        profile.arm()
+        assert profile.mode_text() == "GUIDED" and udp_link.telemetry.heartbeat.armed  # type: ignore[union-attr]
+        armed = time.monotonic()
+        profile.takeoff(altitude_m=1.0)
+        took_off = time.monotonic()
+    finally:
+        peer.stop()
+    assert peer.violations == []
+    sequence = [(int(r.msg.command), r.msg.param1, r.msg.param2) for r in peer.commands()
+                if r.msg.command in (SET_MODE, ARM, TAKEOFF)]
+    assert sequence == [(SET_MODE, 1.0, float(CopterMode.GUIDED)), (ARM, 1.0, 0.0),
+                        (TAKEOFF, 0.0, 0.0)]
+    assert took_off - armed < 0.5  # one command: nothing between arm and take-off
+
+
+def test_ardupilot_rearms_a_copter_that_disarmed_itself_and_takes_off_at_once(
+        udp_link: Link) -> None:
+    """A copter left armed on the ground disarms itself (DISARM_DELAY): the take-off arms it
+    again in GUIDED and sends NAV_TAKEOFF right after."""
+    peer = start_peer(udp_link, "ardupilot", auto_disarm_s=0.6)
+    try:
+        profile = ArduPilotProfile(udp_link)
+        profile.arm()
+        udp_link.wait_for(lambda t: t.heartbeat is not None and not t.heartbeat.armed,
+                          timeout_s=3.0, what="the copter to disarm itself")
+        profile.takeoff(altitude_m=1.0)
+    finally:
+        peer.stop()
+    assert peer.violations == []
+    arms = peer.commands(ARM)
+    takeoff = peer.commands(TAKEOFF)
+    assert [int(r.msg.param2) for r in peer.commands(SET_MODE)] == [CopterMode.GUIDED]
+    assert len(arms) == 2 and len(takeoff) == 1
+    assert takeoff[0].t - arms[1].t < 0.5  # before it can disarm again
 
 
 def test_profile_refuses_the_wrong_autopilot(udp_link: Link) -> None:
@@ -681,3 +452,83 @@ def test_signed_link_interoperates_with_pymavlink_signing() -> None:
     assert peer.violations == []
     assert peer.conn.mav.signing.goodsig_count > 0 and peer.conn.mav.signing.badsig_count == 0
     assert health.refused_signature == 0 and health.frames_received > 0
+
+
+def _heartbeat_frame() -> bytes:
+    mav = v20.MAVLink(None, srcSystem=VEHICLE, srcComponent=1)
+    msg = mav.heartbeat_encode(v20.MAV_TYPE_QUADROTOR, v20.MAV_AUTOPILOT_ARDUPILOTMEGA, 0,
+                               int(CopterMode.STABILIZE), v20.MAV_STATE_STANDBY)
+    return bytes(msg.pack(mav))
+
+
+def _heard(link: Link, count: int, timeout_s: float = 10.0) -> None:
+    deadline = time.monotonic() + timeout_s
+    while link.health.frames_received < count:
+        assert time.monotonic() < deadline, f"{link.health.frames_received} frames, not {count}"
+        time.sleep(0.02)
+
+
+def test_a_tcp_peer_that_is_gone_is_said_once_and_backed_off(
+        caplog: pytest.LogCaptureFixture, capfd: pytest.CaptureFixture[str]) -> None:
+    """An autopilot that died (its TCP port closed, nothing listening): one warning, then
+    reconnection attempts backing off (0.5, 1, 2, 4 s...), not "EOF on TCP socket" in a
+    tight loop (118 MB of log in 40 s); once it listens again, the link hears it again."""
+    server = socket.create_server(("127.0.0.1", 0))
+    port = server.getsockname()[1]
+    transport = MavutilTransport(f"tcp:127.0.0.1:{port}")
+    caplog.set_level(logging.DEBUG, logger="gcs.transport._mavutil_transport")
+    with Link(VEHICLE, transport, gcs_system_id=GCS_SYSID, gcs_heartbeat_period_s=0.1,
+              timesync_period_s=0.0) as link:
+        peer, _ = server.accept()
+        peer.sendall(_heartbeat_frame())
+        _heard(link, 1)
+        peer.close()
+        server.close()  # gone: reconnecting is refused
+        time.sleep(4.0)
+        warnings = [r.getMessage() for r in caplog.records if r.levelno >= logging.WARNING]
+        attempts, disconnects = transport.reconnect_attempts, transport.disconnects
+        connected = transport.connected
+        server = socket.create_server(("127.0.0.1", port))  # back
+        server.settimeout(10.0)
+        peer, _ = server.accept()
+        peer.sendall(_heartbeat_frame())
+        _heard(link, 2)
+        peer.close()
+        server.close()
+        back = [r.getMessage() for r in caplog.records if r.levelno >= logging.WARNING]
+    printed = capfd.readouterr().out
+    print(f"tcp peer gone 4 s: {len(warnings)} warning, {attempts} reconnection attempts")
+    assert len(warnings) == 1, warnings
+    assert re.fullmatch(rf"tcp:127\.0\.0\.1:{port}: (the peer closed the connection|connection "
+                        r"lost \(.+\)); reconnecting, every 0\.5 s at first and at most every "
+                        r"8 s", warnings[0]), warnings
+    assert disconnects == 1 and 2 <= attempts <= 4, (disconnects, attempts)  # 0.5, 1.5, 3.5 s
+    assert "EOF" not in printed and "Connection reset" not in printed, \
+        f"{printed.count(chr(10))} lines printed: {printed[:60]!r}"
+    assert not connected
+    assert back[1].startswith(f"tcp:127.0.0.1:{port}: connected again after "), back
+
+
+def test_a_tcpin_link_takes_its_peer_back_after_it_hung_up(
+        caplog: pytest.LogCaptureFixture) -> None:
+    """The GCS listens (tcpin:); the autopilot hangs up and calls again: one warning, then the
+    link hears it on the new connection (the old one no longer spins the reader)."""
+    caplog.set_level(logging.WARNING, logger="gcs.transport._mavutil_transport")
+    transport = MavutilTransport("tcpin:127.0.0.1:0")
+    address = transport.local_address
+    assert address is not None
+    port = address[1]
+    with Link(VEHICLE, transport, gcs_system_id=GCS_SYSID, gcs_heartbeat_period_s=0.1,
+              timesync_period_s=0.0) as link:
+        for call in (1, 2):
+            peer = socket.create_connection(("127.0.0.1", port))
+            peer.sendall(_heartbeat_frame())
+            _heard(link, call)
+            peer.close()
+            time.sleep(0.5)
+        spins = transport.read_errors
+    texts = [r.getMessage() for r in caplog.records]
+    assert texts[0] == ("tcpin:127.0.0.1:0: the peer closed the connection; waiting for it "
+                        "to connect again"), texts
+    assert texts[1].startswith("tcpin:127.0.0.1:0: connected again after") and len(texts) == 3
+    assert spins == 0

@@ -310,7 +310,8 @@ def test_manager_reports_presence_and_names_missing_vehicles(fabric: Fabric) -> 
     events: list[PresenceEvent] = []
     configs = [LinkConfig(sysid=3, heartbeat_timeout_s=0.5),
                LinkConfig(sysid=4, heartbeat_timeout_s=0.5)]
-    settings = GcsLinkConfig(fleet=FLEET, timesync_period_s=0.0)
+    # the stand-in vehicles do not sign: presence is the subject here, not signing
+    settings = GcsLinkConfig(fleet=FLEET, timesync_period_s=0.0, signing=False)
     vehicle = ZenohVehicle(fabric.sim, 3)
     stranger = ZenohVehicle(fabric.sim, 9)
     manager = LinkManager(configs, settings=settings, session=fabric.gcs,

@@ -30,7 +30,7 @@ from viser import _messages as viser_messages
 
 from gcs.app import free_tcp_port
 from gcs.flightlog import FlightLog, TlogIndex
-from gcs.wire import SAFETY_ARMED, MavlinkEncoder, SimMode, mavlink
+from gcs.wire import SAFETY_ARMED, MavlinkEncoder, heartbeat_mode_text, mavlink
 from tests.conftest import run_gcs
 from tests.logfiles import ardupilot_log, plain_copy, raw_messages, with_frame
 from web._actions import OperatorActions
@@ -306,7 +306,7 @@ def test_replay_shows_mode_armed_and_battery_as_the_live_table(flight: Path) -> 
                       and m.get_srcSystem() == vid][-1]
                 status = [m for m in raw if m.get_type() == "SYS_STATUS" and m._timestamp <= t
                           and m.get_srcSystem() == vid][-1]
-                assert cells[2] == SimMode(hb.custom_mode).name
+                assert cells[2] == heartbeat_mode_text(hb.autopilot, hb.custom_mode)
                 assert cells[3] == ("yes" if hb.base_mode & SAFETY_ARMED else "no")
                 assert cells[4] == f"{status.battery_remaining:.0f}"
                 assert float(cells[8]) == pytest.approx(t - hb._timestamp, abs=0.051)
@@ -384,7 +384,8 @@ def test_replay_command_serves_the_page_without_controls(flight: Path,
     with served(flight) as (port, lines), viewer_of(port) as viewer:
         page = viewer.settled_texts()
     assert page >= TIMELINE
-    assert not page & controls, page & controls
+    view = {"View", "camera follows team", "Centre on team"}  # the camera's: in both pages
+    assert view <= page and not (page & controls) - view, page & controls
     assert not any("data-gcs-pad" in text for text in page)
     assert lines[1:] == ["stopping…"]  # a whole log: no note
 

@@ -19,8 +19,9 @@ from gcs.config import Team, load_team
 from gcs.loop import Action, Phase
 from gcs.loop._clock import ClockStoppedError
 from gcs.loop._safety import SafetyReason
+from gcs.testing import team_key
 from gcs.transport import ZenohSettings
-from gcs.wire import SimMode, keys
+from gcs.wire import Sealer, SimMode, keys
 
 TEAM = load_team("configs/bebop_square.yaml")
 
@@ -47,8 +48,9 @@ def flying() -> Iterator[GcsApp]:
 
 
 def break_vehicle(app: GcsApp, action: str, sysid: int) -> None:
-    app.session.put(keys.sim(app.fleet, "control"),
-                    f'{{"action": "{action}", "sysid": {sysid}}}'.encode())
+    topic = keys.sim(app.fleet, "control")
+    app.session.put(topic, Sealer(team_key(), topic).seal(
+        f'{{"action": "{action}", "sysid": {sysid}}}'.encode()))
 
 
 def sim_sleep(app: GcsApp, seconds: float) -> None:

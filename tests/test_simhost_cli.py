@@ -20,12 +20,12 @@ from pathlib import Path
 
 import pytest
 import zenoh
-from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from gcs.app import free_tcp_port
+from gcs.testing import signed_connection, team_key
 from gcs.transport import ZenohSettings, open_session
-from gcs.wire import SimTruth, decode_clock, encode_time, keys
+from gcs.wire import Sealer, SimTruth, Unsealer, decode_clock, encode_time, keys
 from sim.__main__ import main as sim_main
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -114,15 +114,18 @@ def lockstep_as_a_gcs(proc: subprocess.Popen[str], ready: str, fleet: str,
     truth_count: list[int | None] = []
     truth: list[SimTruth] = []
 
+    open_clock = Unsealer(team_key(), keys.clock(fleet)).open  # the host seals its keys
+    open_truth = Unsealer(team_key(), keys.sim(fleet, "truth")).open
+
     def on_clock(s: zenoh.Sample) -> None:
-        sample = decode_clock(s.payload.to_bytes())
+        sample = decode_clock(open_clock(s.payload.to_bytes()))
         clock.append((time.monotonic(), sample.t))
         announced.append(dict(sample.sent))
         truth_count.append(sample.truth)
 
     subs = [session.declare_subscriber(keys.clock(fleet), on_clock),
             session.declare_subscriber(keys.sim(fleet, "truth"), lambda s: truth.append(
-                SimTruth.from_bytes(s.payload.to_bytes())))]
+                SimTruth.from_bytes(open_truth(s.payload.to_bytes()))))]
     try:
         # Without an ack the host stands at its first chunk (nothing runs before a GCS
         # acks, so what a GCS sees does not depend on when it joined), and keeps
@@ -138,7 +141,10 @@ def lockstep_as_a_gcs(proc: subprocess.Popen[str], ready: str, fleet: str,
         before = announced[-1]
         ack = session.declare_publisher(keys.clock_ack(fleet))
         ack.put(b"junk")  # ignored (logged), not fatal
-        ack.put(encode_time(1.0))
+        ack.put(encode_time(1.0))  # a stranger's: not sealed, ignored too
+        time.sleep(0.3)
+        assert max(t for _, t in clock) == pytest.approx(CHUNK)
+        ack.put(Sealer(team_key(), keys.clock_ack(fleet)).seal(encode_time(1.0)))
         eventually(lambda: clock[-1][1] == pytest.approx(1.25), "the clock to reach 1.25 s")
         time.sleep(0.3)
         assert max(t for _, t in clock) == pytest.approx(1.25)  # and not one chunk further
@@ -193,6 +199,16 @@ def free_udp_ports(count: int) -> int:
     raise RuntimeError(f"no {count} consecutive free UDP ports")
 
 
+def test_the_help_puts_the_first_vehicle_on_the_base_port() -> None:
+    """As the ready line below shows: the first vehicle on P, the second on P+1 (the help
+    said vehicle k on P+k, which puts vehicle 1 on P+1)."""
+    out = subprocess.run(sim_command("--help"), cwd=ROOT, capture_output=True, text=True,
+                         timeout=60, check=True).stdout
+    text = " ".join(out.split())
+    assert "P+k" not in text
+    assert "first vehicle (on P); the others follow in team order on P+1, P+2" in text
+
+
 def test_gcs_sim_hosts_the_team_with_sitl_style_udp_ports_and_stops_on_sigint() -> None:
     """``gcs sim`` hands its options to the simulator: a pymavlink client on vehicle 2's UDP
     port gets that vehicle's HEARTBEAT and an acknowledged command, as from a SITL."""
@@ -205,8 +221,8 @@ def test_gcs_sim_hosts_the_team_with_sitl_style_udp_ports_and_stops_on_sigint() 
     try:
         ready = first_line(proc)
         assert ready.startswith("sim ready: ") and f"2=127.0.0.1:{base + 1}" in ready, ready
-        client = mavutil.mavlink_connection(f"udpout:127.0.0.1:{base + 1}", source_system=200,
-                                            source_component=190)
+        client = signed_connection(f"udpout:127.0.0.1:{base + 1}", source_system=200,
+                                   source_component=190)
         try:
             deadline = time.monotonic() + 10.0
             heartbeat = ack = None

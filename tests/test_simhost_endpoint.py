@@ -19,12 +19,15 @@ import pytest
 from gcs.wire import (
     CUSTOM_MODE_ENABLED,
     SAFETY_ARMED,
+    SIM_PX4_MODES,
     FrameDecoder,
     MavlinkEncoder,
     MavMessage,
+    Px4MainMode,
     SigningKey,
     SimMode,
     mavlink,
+    px4_base_mode,
 )
 from gcs.wire._setpoints import MASK_ACCEL, MASK_ACCEL_XY_POS_Z, accel_setpoint_message
 from sim import (
@@ -51,6 +54,8 @@ SET_MODE = mavlink.MAV_CMD_DO_SET_MODE
 INTERVAL = mavlink.MAV_CMD_SET_MESSAGE_INTERVAL
 ACCEPTED = mavlink.MAV_RESULT_ACCEPTED
 DENIED = mavlink.MAV_RESULT_DENIED
+OFFBOARD = Px4MainMode.OFFBOARD
+"""DO_SET_MODE param2 of OFFBOARD: the vehicles take PX4's modes."""
 
 
 @dataclass
@@ -140,9 +145,13 @@ def test_heartbeat_and_telemetry_stream_at_the_default_rates_in_sim_time() -> No
     assert counts["ATTITUDE_QUATERNION"] == pytest.approx(20, abs=1)
     assert counts["HIGHRES_IMU"] == pytest.approx(20, abs=1)
     assert counts["SYS_STATUS"] == pytest.approx(4, abs=1)
+    assert counts["GPS_RAW_INT"] == pytest.approx(10, abs=1)  # 5 Hz
+    assert counts["GLOBAL_POSITION_INT"] == pytest.approx(20, abs=1)  # 10 Hz
     hb = of_type(got, "HEARTBEAT")[-1]
-    assert (hb.type, hb.autopilot) == (mavlink.MAV_TYPE_QUADROTOR, mavlink.MAV_AUTOPILOT_GENERIC)
-    assert hb.base_mode == CUSTOM_MODE_ENABLED and hb.custom_mode == SimMode.DISARMED
+    assert (hb.type, hb.autopilot) == (mavlink.MAV_TYPE_QUADROTOR, mavlink.MAV_AUTOPILOT_PX4)
+    disarmed = SIM_PX4_MODES[SimMode.DISARMED]
+    assert hb.custom_mode == disarmed and hb.base_mode == px4_base_mode(disarmed, armed=False)
+    assert not hb.base_mode & SAFETY_ARMED
     assert hb.system_status == mavlink.MAV_STATE_STANDBY
     position = of_type(got, "LOCAL_POSITION_NED")[-1]
     assert position.time_boot_ms == pytest.approx(2000, abs=20)  # sim time, ms
@@ -161,11 +170,11 @@ def test_set_message_interval_changes_rates_and_refuses_unknown_messages() -> No
     b.command(INTERVAL, mavlink.MAVLINK_MSG_ID_LOCAL_POSITION_NED, 100_000)  # 10 Hz
     b.command(INTERVAL, mavlink.MAVLINK_MSG_ID_HIGHRES_IMU, -1)  # stop
     b.command(INTERVAL, mavlink.MAVLINK_MSG_ID_SYS_STATUS, 0)  # default (2 Hz)
-    b.command(INTERVAL, mavlink.MAVLINK_MSG_ID_GPS_RAW_INT, 100_000)  # not streamed here
+    b.command(INTERVAL, mavlink.MAVLINK_MSG_ID_VFR_HUD, 100_000)  # not sent here
     b.command(INTERVAL, mavlink.MAVLINK_MSG_ID_ATTITUDE, -5)  # not a valid interval
     first = b.received()
     assert acks(first) == [(INTERVAL, ACCEPTED)] * 3 + [(INTERVAL, DENIED)] * 2
-    assert texts(first) == ["interval: not a message this vehicle streams",
+    assert texts(first) == ["interval: not a message this vehicle sends",
                             "interval: interval must be -1, 0 or > 0 us"]
     b.run(2.0)
     counts = Counter(m.get_type() for m in b.received())
@@ -182,7 +191,7 @@ def test_commands_are_acknowledged_with_the_result_a_real_autopilot_gives() -> N
     b.command(TAKEOFF, 0, 0, 0, 0, 0, 0, 1.0)  # while disarmed
     b.command(mavlink.MAV_CMD_DO_SET_SERVO, 1, 1500)  # not supported here
     b.command(ARM, 1)
-    b.command(SET_MODE, CUSTOM_MODE_ENABLED, SimMode.OFFBOARD)  # no setpoint stream
+    b.command(SET_MODE, CUSTOM_MODE_ENABLED, OFFBOARD)  # no setpoint stream
     b.command(SET_MODE, CUSTOM_MODE_ENABLED, 42)  # no such mode
     b.command(TAKEOFF, 0, 0, 0, 0, 0, 0, 1.0)
     got = b.received()
@@ -196,17 +205,22 @@ def test_commands_are_acknowledged_with_the_result_a_real_autopilot_gives() -> N
     statustexts = of_type(got, "STATUSTEXT")
     assert "arm denied: no position measurement received yet" in texts(got)
     assert "takeoff denied: vehicle is disarmed" in texts(got)
-    chunks = [m for m in statustexts if m.id != 0]
-    assert [m.chunk_seq for m in chunks] == [0, 1] and len({m.id for m in chunks}) == 1
-    assert "".join(m.text for m in chunks) == ("mode OFFBOARD denied: no setpoint received "
-                                               "within the setpoint timeout")
+    chunked: dict[int, list[MavMessage]] = {}
+    for m in statustexts:
+        if m.id != 0:
+            chunked.setdefault(m.id, []).append(m)
+    assert [[m.chunk_seq for m in c] for c in chunked.values()] == [[0, 1], [0, 1]]
+    assert ["".join(m.text for m in c) for c in chunked.values()] == [
+        "mode OFFBOARD denied: no setpoint received within the setpoint timeout",
+        "set mode: PX4 mode 42.0 is not a mode of this vehicle"]
     # A mode change is reported by a HEARTBEAT at once, not at the next 1 Hz beat.
     modes = [(bool(m.base_mode & SAFETY_ARMED), m.custom_mode)
              for m in of_type(got, "HEARTBEAT")]
-    assert modes[-2:] == [(True, SimMode.HOLD), (True, SimMode.TAKEOFF)]
+    assert modes[-2:] == [(True, SIM_PX4_MODES[SimMode.HOLD]),
+                          (True, SIM_PX4_MODES[SimMode.TAKEOFF])]
     b.run(3.5)
     got = b.received()
-    assert of_type(got, "HEARTBEAT")[-1].custom_mode == SimMode.HOLD
+    assert of_type(got, "HEARTBEAT")[-1].custom_mode == SIM_PX4_MODES[SimMode.HOLD]
     assert of_type(got, "LOCAL_POSITION_NED")[-1].z == pytest.approx(-1.0, abs=0.1)
     b.command(mavlink.MAV_CMD_NAV_LAND)
     b.command(ARM, 0)  # in flight: refused
@@ -226,7 +240,7 @@ def test_accepted_setpoints_are_echoed_at_once_and_flown() -> None:
                                                        mavlink.MAV_FRAME_LOCAL_NED)
     assert (echo.afx, echo.afy, echo.z) == pytest.approx((0.8, -0.4, -1.2))
     assert echo.time_boot_ms == pytest.approx(b.world.t * 1000, abs=1)
-    b.command(SET_MODE, CUSTOM_MODE_ENABLED, SimMode.OFFBOARD)
+    b.command(SET_MODE, CUSTOM_MODE_ENABLED, OFFBOARD)
     assert acks(b.received()) == [(SET_MODE, ACCEPTED)]
     x0 = b.autopilot.p_ned[0, 0]
     for _ in range(8):  # 4 Hz for 2 s
@@ -240,7 +254,7 @@ def test_accepted_setpoints_are_echoed_at_once_and_flown() -> None:
     assert echo.type_mask == MASK_ACCEL
     assert b.endpoint.counters().setpoints_accepted == 10
     b.run(1.0)  # the stream stops: the setpoint timeout returns the vehicle to HOLD
-    assert of_type(b.received(), "HEARTBEAT")[0].custom_mode == SimMode.HOLD
+    assert of_type(b.received(), "HEARTBEAT")[0].custom_mode == SIM_PX4_MODES[SimMode.HOLD]
 
 
 def test_refused_setpoints_are_reported_and_never_flown() -> None:
@@ -263,7 +277,7 @@ def test_refused_setpoints_are_reported_and_never_flown() -> None:
         "setpoint refused: accel 1e+03 > 10 m/s^2"]  # same reason again within 1 s: counted only
     assert all(m.severity == mavlink.MAV_SEVERITY_WARNING for m in of_type(got, "STATUSTEXT"))
     assert b.autopilot.state.sp_time[0] == sp_time  # nothing reached the autopilot
-    b.command(SET_MODE, CUSTOM_MODE_ENABLED, SimMode.OFFBOARD)
+    b.command(SET_MODE, CUSTOM_MODE_ENABLED, OFFBOARD)
     assert acks(b.received()) == [(SET_MODE, DENIED)]
     b.run(1.0)
     got = b.received()

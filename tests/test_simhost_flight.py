@@ -23,8 +23,20 @@ from gcs.app._simprocess import SimStartError
 from gcs.config import GcsLinkConfig, Team, load_team
 from gcs.link import LinkManager, Presence, PresenceEvent
 from gcs.link._discovery import PresenceSource
+from gcs.testing import team_key
 from gcs.transport import ZenohSettings
-from gcs.wire import MavlinkEncoder, MavMessage, SimMode, SimTruth, decode_clock, keys, mavlink
+from gcs.wire import (
+    MavlinkEncoder,
+    MavMessage,
+    Sealer,
+    SimMode,
+    SimTruth,
+    Unsealer,
+    decode_clock,
+    keys,
+    mavlink,
+    sim_mode_of,
+)
 from sim._faults import ControlAction, ControlCommand
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -69,11 +81,13 @@ class Gcs:
         self.session: zenoh.Session = self.manager.session  # type: ignore[assignment]
         self.clock: list[float] = []
         self.truth: list[SimTruth] = []
+        clock = Unsealer(team_key(), keys.clock(fleet))  # what the sim publishes is sealed
+        truth = Unsealer(team_key(), keys.sim(fleet, "truth"))
         self._subs = [
             self.session.declare_subscriber(keys.clock(fleet), lambda s: self.clock.append(
-                decode_clock(s.payload.to_bytes()).t)),
+                decode_clock(clock.open(s.payload.to_bytes())).t)),
             self.session.declare_subscriber(keys.sim(fleet, "truth"), lambda s: self.truth.append(
-                SimTruth.from_bytes(s.payload.to_bytes())))]
+                SimTruth.from_bytes(truth.open(s.payload.to_bytes()))))]
 
     def seen(self, sysid: int, presence: Presence, source: PresenceSource) -> float | None:
         """When that event was reported (monotonic), or None."""
@@ -81,8 +95,9 @@ class Gcs:
                      if (e.sysid, e.presence, e.source) == (sysid, presence, source)), None)
 
     def control(self, action: ControlAction, sysid: int) -> None:
-        self.session.put(keys.sim(self.fleet, "control"),
-                         ControlCommand(action, sysid).to_bytes())
+        topic = keys.sim(self.fleet, "control")
+        self.session.put(topic, Sealer(team_key(), topic).seal(
+            ControlCommand(action, sysid).to_bytes()))
 
     def close(self) -> None:
         for sub in self._subs:
@@ -137,7 +152,7 @@ def test_team_takes_off_flies_offboard_and_a_killed_vehicle_vanishes(gcs: Gcs) -
     def altitude_reached() -> bool:
         return all(link.telemetry.position is not None
                    and abs(link.telemetry.position.p_ned[2] + ALTITUDE) < 0.1
-                   and link.telemetry.heartbeat.custom_mode == SimMode.HOLD  # type: ignore[union-attr]
+                   and sim_mode_of(link.telemetry.heartbeat.custom_mode) is SimMode.HOLD  # type: ignore[union-attr]
                    for link in manager.links.values())
 
     eventually(altitude_reached, "altitude reached and HOLD", timeout_s=10.0)
@@ -150,7 +165,7 @@ def test_team_takes_off_flies_offboard_and_a_killed_vehicle_vanishes(gcs: Gcs) -
     moved_north, moved_east, pitches = [], [], []
     for s in sysids:
         t = manager.links[s].telemetry
-        assert t.heartbeat is not None and t.heartbeat.custom_mode == SimMode.OFFBOARD
+        assert t.heartbeat is not None and sim_mode_of(t.heartbeat.custom_mode) is SimMode.OFFBOARD
         assert t.position is not None and t.attitude is not None and t.imu is not None
         dx, dy = (t.position.p_ned[k] - start[s][k] for k in (0, 1))
         assert dx > 0.6, f"vehicle {s} moved {dx:.2f} m north"
@@ -221,7 +236,7 @@ def test_cut_link_goes_silent_both_ways_until_restored(gcs: Gcs) -> None:
     eventually(lambda: 3 not in manager.missing() and manager.links[3].health.alive,
                "vehicle 3 back")
     mode = manager.links[3].telemetry.heartbeat.custom_mode  # type: ignore[union-attr]
-    assert mode != SimMode.LAND
+    assert sim_mode_of(mode) is not SimMode.LAND
 
 
 def test_junk_and_foreign_frames_over_zenoh_leave_the_vehicle_answering(gcs: Gcs) -> None:
@@ -229,7 +244,8 @@ def test_junk_and_foreign_frames_over_zenoh_leave_the_vehicle_answering(gcs: Gcs
     heard: list[MavMessage] = []
     link.add_message_listener(heard.append)
     to_vehicle = keys.mavlink(gcs.fleet, 1, keys.Direction.TO_VEHICLE)
-    stranger = MavlinkEncoder(system_id=200, component_id=190)
+    stranger = MavlinkEncoder(system_id=200, component_id=190,  # another GCS of the team
+                              signing_key=team_key())
 
     def interval(target: int, message: int, interval_us: float) -> bytes:
         return stranger.encode(stranger.mav.command_long_encode(
@@ -271,7 +287,8 @@ def test_junk_and_foreign_frames_over_zenoh_leave_the_vehicle_answering(gcs: Gcs
 def test_refused_setpoints_are_reported_and_the_vehicle_stays_in_hold(gcs: Gcs) -> None:
     link = gcs.manager.links[2]
     eventually(lambda: link.telemetry.heartbeat is not None
-               and link.telemetry.heartbeat.custom_mode == SimMode.HOLD, "vehicle 2 in HOLD")
+               and sim_mode_of(link.telemetry.heartbeat.custom_mode) is SimMode.HOLD,
+               "vehicle 2 in HOLD")
     mav = link.mav
     z = -ALTITUDE
     bad = [
@@ -294,6 +311,6 @@ def test_refused_setpoints_are_reported_and_the_vehicle_stays_in_hold(gcs: Gcs) 
                         "setpoint refused: NaN or infinite value",
                         "setpoint refused: accel 50 > 10 m/s^2"} <= reported(),
                "four STATUSTEXTs")
-    assert link.telemetry.heartbeat.custom_mode == SimMode.HOLD  # type: ignore[union-attr]
+    assert sim_mode_of(link.telemetry.heartbeat.custom_mode) is SimMode.HOLD  # type: ignore[union-attr]
     with pytest.raises(Exception, match="DENIED"):  # no valid stream: OFFBOARD refused
         gcs.manager.profiles[2].set_mode(SimMode.OFFBOARD)  # type: ignore[attr-defined]

@@ -32,8 +32,9 @@ import pytest
 import viser
 
 from gcs.app import free_tcp_port
+from gcs.testing import team_key
 from gcs.transport import ZenohSettings, open_session
-from gcs.wire import SimTruth, keys
+from gcs.wire import SimTruth, Unsealer, keys
 from tests.colours import hue_apart, hue_saturation_value
 from web import palette
 from web._browser_script import ABORT_ANSWERS, RECONNECT_AFTER_S, STALE_AFTER_S
@@ -89,9 +90,11 @@ class Demo:
                          daemon=True).start()
         self.session = open_session(ZenohSettings(mode="peer", connect=(self.endpoint,)))
         self.truth: SimTruth | None = None
+        topic = keys.sim("default", "truth")
+        unseal = Unsealer(team_key(), topic).open  # the simulator seals it with the team key
         self._sub = self.session.declare_subscriber(
-            keys.sim("default", "truth"),
-            lambda s: setattr(self, "truth", SimTruth.from_bytes(bytes(s.payload.to_bytes()))))
+            topic, lambda s: setattr(self, "truth", SimTruth.from_bytes(
+                unseal(bytes(s.payload.to_bytes())))))
 
     @staticmethod
     def _pump(stream, sink: list[str]) -> None:  # type: ignore[no-untyped-def]
@@ -173,13 +176,19 @@ def unprivileged_chromium(directory: Path) -> Path:
     return wrapper
 
 
-@pytest.fixture(scope="module")
-def browser(tmp_path_factory):  # type: ignore[no-untyped-def]
+def headless_chromium(tmp_path_factory: pytest.TempPathFactory):  # type: ignore[no-untyped-def]
+    """Headless Chromium, as an ordinary user's browser, until the generator is closed (the
+    body of a module's ``browser`` fixture)."""
     executable = unprivileged_chromium(tmp_path_factory.mktemp("chromium"))
     with sync_api.sync_playwright() as p:
         b = p.chromium.launch(executable_path=str(executable), headless=True, args=CHROMIUM_ARGS)
         yield b
         b.close()
+
+
+@pytest.fixture(scope="module")
+def browser(tmp_path_factory):  # type: ignore[no-untyped-def]
+    yield from headless_chromium(tmp_path_factory)
 
 
 WIRES: dict[int, SceneRecord] = {}
@@ -656,17 +665,18 @@ def test_the_pilot_flies_the_team_with_buttons_keys_and_sticks(pilot, demo: Demo
     assert rate >= 10.0 and moved > 0.0, \
         f"the browser received {rate:.1f} scene updates a second ({moved:.1f} with moves)"
 
-    # the vehicles table fits its panel: the last column (rtt) without scrolling sideways
-    # (measured in one go: the table is rebuilt with every tick)
+    # the vehicles' tables fit their panel: each last column without scrolling sideways
+    # (measured in one go: the tables are rebuilt with every tick)
     fit = pilot.evaluate("""() => {
         const box = document.querySelector("[data-gcs=vehicles]");
-        const last = box.querySelector("tr:first-child th:last-child");
-        return {header: last.textContent, overflow: box.scrollWidth - box.clientWidth,
-                right: last.getBoundingClientRect().right,
+        const last = [...box.querySelectorAll("table tr:first-child th:last-child")];
+        return {headers: last.map(h => h.textContent),
+                overflow: box.scrollWidth - box.clientWidth,
+                right: Math.max(...last.map(h => h.getBoundingClientRect().right)),
                 panel: box.getBoundingClientRect().right};
     }""")
-    assert fit["header"] == "rtt ms" and fit["overflow"] <= 1 and fit["right"] <= fit["panel"], (
-        f"the vehicles table does not fit its panel: {fit}")
+    assert (fit["headers"] == ["rope N (sim)", "position source"] and fit["overflow"] <= 1
+            and fit["right"] <= fit["panel"]), f"the vehicles' tables do not fit: {fit}"
 
     pilot.get_by_role("tab", name="Plots").click()
     assert pilot.get_by_text("distances (m)").is_visible()

@@ -16,8 +16,16 @@ from gcs.loop import FleetState
 from gcs.wire import SimTruth
 from tests.colours import hue_apart, hue_saturation_value
 from web import Trails, palette, quad_mesh
-from web._frame import LABEL_LIFT, TeamView, build_frame, rope_pull_estimate, vehicle_states
+from web._frame import (
+    LABEL_LIFT,
+    TeamView,
+    build_frame,
+    frame_reach,
+    rope_pull_estimate,
+    vehicle_states,
+)
 from web._quadmesh import yaw_wxyz
+from web._scene import compass_at
 from web.palette import VehicleState
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -71,7 +79,7 @@ def test_only_an_ok_vehicle_is_green_and_only_the_payload_magenta() -> None:
         palette.state_colors(np.array([s for s in palette.VehicleState
                                        if s is not palette.VehicleState.OK])),
         [palette.GHOST, palette.VELOCITY, palette.TRAIL, palette.UNKNOWN, palette.GEOFENCE,
-         palette.PAYLOAD_ESTIMATED],
+         palette.PAYLOAD_ESTIMATED, palette.GROUND_MARK],
     ])
     hue, saturation, _ = hue_saturation_value(others)
     for own in (palette.OK, palette.PAYLOAD):
@@ -203,6 +211,15 @@ def test_frame_of_a_perfect_team_with_sim_truth() -> None:
     np.testing.assert_allclose(frame.velocity[:, 1] - frame.velocity[:, 0],
                                np.tile([0.5, 0.0, 0.0], (3, 1)))
     np.testing.assert_allclose(frame.centroid, [1.0, 2.0, -1.5], atol=1e-12)
+    # the payload's drop line to the ground, a cross at its foot, its height
+    np.testing.assert_allclose(frame.drop[0], [[1.0, 2.0, -0.6], [1.0, 2.0, 0.0]])
+    np.testing.assert_allclose(frame.drop[1:, :, 2], 0.0)
+    np.testing.assert_allclose(frame.drop[1:].mean(axis=1), [[1.0, 2.0, 0.0]] * 2)
+    assert frame.payload_height == pytest.approx(0.6)
+    # how far the team and its payload reach from the centroid: the square's corners
+    assert frame_reach(frame) == pytest.approx(math.hypot(0.5, 0.5))
+    sw = compass_at(frame.centroid, frame_reach(frame))  # south-west of the team, clear of it
+    assert sw[2] == 0.0 and np.all(sw[:2] < [1.0, 2.0] - np.array(frame_reach(frame)))
 
 
 def test_frame_without_truth_estimates_the_payload_and_hides_unknown_vehicles() -> None:
@@ -221,6 +238,7 @@ def test_frame_without_truth_estimates_the_payload_and_hides_unknown_vehicles() 
     nobody = np.full((4, 2), np.nan)
     empty = build_frame(VIEW, fleet_at(nobody), scale=1.0, truth=None, trails=Trails(4))
     assert empty.payload_p is None and empty.centroid is None
+    assert len(empty.drop) == 0 and math.isnan(empty.payload_height) and frame_reach(empty) == 0
     assert len(empty.ropes) == len(empty.edges) == len(empty.ghost_edges) == 0
 
 

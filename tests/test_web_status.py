@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from gcs.analysis import analyze
-from gcs.config import load_team
+from gcs.config import LinkConfig, load_team
 from gcs.guidance import MotionDemand
 from gcs.link import LinkHealth
 from gcs.loop import FenceVerdict, FleetState, OperatorSnapshot, Phase, RuntimeSnapshot, TickStats
@@ -22,7 +22,14 @@ from gcs.wire import SimTruth
 from web import TeamView, palette
 from web._frame import rope_pull_estimate
 from web._history import History
-from web._status import UiStats, events_html, summary_html, vehicles_html
+from web._status import (
+    UiStats,
+    event_filter_html,
+    events_html,
+    position_sources,
+    summary_html,
+    vehicles_html,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 TEAM = load_team(ROOT / "configs" / "bebop_square.yaml")
@@ -107,21 +114,38 @@ def test_the_rope_legend_says_whether_ropes_are_measured_or_estimated() -> None:
     assert 'title="horizontal rope pull estimated from tilt' in rows
 
 
-def test_summary_shows_a_frozen_or_landing_team() -> None:
-    event = SafetyEvent(SafetyReason.STALE, 2, "vehicle 2: stale")
-    frozen = SafetyVerdict(freeze=True, land=False, events=(event,))
-    assert "motion frozen" in summary_html(snapshot(safety=frozen), loop=None, control="",
-                                           ui=None)
-    landing = SafetyVerdict(freeze=True, land=True, events=(event,))
-    assert "landing the team" in summary_html(snapshot(safety=landing), loop=None,
-                                              control="", ui=None)
+def test_the_safety_state_is_a_banner_with_its_reasons_and_vehicles() -> None:
+    """Ok, frozen, landing: a banner each (it was a word of small orange text), naming
+    each rule once with the vehicles it covers."""
+    def banner(safety: SafetyVerdict) -> tuple[str, str]:
+        html = summary_html(snapshot(safety=safety), loop=None, control="", ui=None)
+        m = re.search(r'data-gcs-banner="safety" data-gcs-safety="(\w+)"[^>]*>([^<]*)<', html)
+        assert m is not None, html
+        return m.group(1), html_lib.unescape(m.group(2))
+
+    assert banner(SafetyVerdict(freeze=False, land=False, events=())) == ("ok", "SAFETY OK")
+    stale = tuple(SafetyEvent(SafetyReason.STALE, vid, f"vehicle {vid}: stale")
+                  for vid in (3, 1, 2))
+    state, text = banner(SafetyVerdict(freeze=True, land=False, events=stale))
+    assert state == "frozen"
+    assert text == "MOTION FROZEN: telemetry is stale — vehicles 1,2,3"
+    lost = SafetyEvent(SafetyReason.LOST, 4, "vehicle 4: lost")
+    state, text = banner(SafetyVerdict(freeze=True, land=True, events=(*stale, lost)))
+    assert state == "landing"
+    assert text == ("LANDING THE TEAM: telemetry is stale — vehicles 1,2,3; "
+                    "link lost — vehicle 4")
+    assert banner(SafetyVerdict(freeze=True, land=False, events=()))[0] == "waiting"
+    held = summary_html(snapshot(safety=SafetyVerdict(freeze=True, land=False, events=(),
+                                                      hold=True, deformation=1.2)),
+                        loop=None, control="", ui=None)
+    assert 'data-gcs-banner="safety"' not in held and 'data-gcs-banner="hold"' in held
 
 
 def test_recovery_hold_and_geofence_are_banners() -> None:
     """What the operator must act on or know at once is a banner, not a line that scrolls
     away in the events: vehicles waiting for Resume, a held team, the geofence."""
     plain = summary_html(snapshot(), loop=None, control="", ui=None)
-    assert "data-gcs-banner" not in plain
+    assert re.findall(r'data-gcs-banner="(\w+)"', plain) == ["safety"]  # ok, and nothing more
     waiting = dataclasses.replace(
         snapshot(), recovery="vehicles 2, 3 out of the streaming mode: press Resume to fly "
                              "them again")
@@ -136,38 +160,65 @@ def test_recovery_hold_and_geofence_are_banners() -> None:
     assert 'data-gcs-banner="fence"' in html_ and "at the geofence (east)" in html_
 
 
+def _cells(html: str, key: str) -> dict[str, list[str]]:
+    rows = dict(re.findall(rf'data-gcs="{key}-(\d)">(.*?)</tr>', html))
+    return {vid: [html_lib.unescape(re.sub("<[^>]+>", "", c)).strip()
+                  for c in re.findall(r"<td[^>]*>(.*?)</td>", row)] for vid, row in rows.items()}
+
+
 def test_vehicle_rows_show_state_mode_battery_tilt_rope_and_link() -> None:
     health = {1: LinkHealth(sysid=1, heartbeat_age_s=0.4, alive=True, frames_received=100,
                             frames_sent=50, packets_lost=3, refused_bad_crc=1,
                             refused_signature=0, refused_wrong_system=1, foreign_systems=(),
                             garbage_bytes=0, truncated=0, rtt_s=0.012)}
-    html = vehicles_html(snapshot(), health=health, truth=None, mass=0.4, stale_after=0.5)
-    rows = dict(re.findall(r'data-gcs="vehicle-(\d)">(.*?)</tr>', html))
-    cells = [html_lib.unescape(re.sub("<[^>]+>", "", c)).strip()
-             for c in re.findall(r"<td[^>]*>(.*?)</td>", rows["1"])]
-    assert cells[:8] == ["1", "● ok", "OFFBOARD", "yes", "90", "0.0", "1.80", "0.00"]
-    assert cells[8:] == ["0.4", "3", "2", "12"]
-    assert "holding" in rows["3"] and "HOLD" in rows["3"]
-    four = [re.sub("<[^>]+>", "", c).strip() for c in re.findall(r"<td[^>]*>(.*?)</td>",
-                                                                  rows["4"])]
-    assert four[3:6] == ["no", "–", "–"] and four[8:] == ["–"] * 4  # unknown, no link data
+    stale = dataclasses.replace(snapshot(), fleet=dataclasses.replace(
+        snapshot().fleet, age=np.array([0.05, 0.05, 0.05, 0.8])))
+    html = vehicles_html(stale, health=health, truth=None, mass=0.4, stale_after=0.5,
+                         voltage=np.array([11.94, 11.5, np.nan, 10.0]),
+                         quality={1: 97.04, 2: 0.0},
+                         sources={1: "local NED (shared)", 2: "local NED <x>"})
+    vehicles, links = _cells(html, "vehicle"), _cells(html, "link")
+    assert vehicles["1"] == ["1", "● ok", "OFFBOARD", "yes", "90", "11.9", "1.80", "0.0", "0.4",
+                             "0.05", "0.00"]
+    assert links["1"] == ["1", "97", "3", "2", "12", "local NED (shared)"]
+    assert links["2"] == ["2", "0", "–", "–", "–", "local NED <x>"]  # escaped, then read back
+    assert "local NED &lt;x&gt;" in html
+    assert "holding" in vehicles["3"][1] and vehicles["3"][2] == "HOLD"
+    assert vehicles["3"][5] == "–"  # no voltage known
+    four = vehicles["4"]
+    assert four[1] == "● stale" and four[9] == "0.8"  # the position's age, past stale_after
+    assert 'color:#c0392b">0.8<' in html
+    assert four[3:5] == ["no", "–"] and four[7] == "–"  # unknown
+    assert links["4"] == ["4", "–", "–", "–", "–", "–"]  # no link data
     assert "rope pull ≈ N" in html
     truth = SimTruth(t=5.0, ids=(4, 3, 2, 1), vehicle_p_ned=((0.0, 0.0, 0.0),) * 4,
                      payload_p_ned=(0.0, 0.0, -0.7), payload_v_ned=(0.0, 0.0, 0.0),
                      rope_tension=(4.0, 3.0, 2.0, 1.25))
     measured = vehicles_html(snapshot(), health={}, truth=truth, mass=0.4, stale_after=0.5)
     assert "rope N (sim)" in measured
-    assert re.search(r'vehicle-1">(?:<td[^>]*>.*?</td>){7}<td[^>]*>1.25<', measured)
+    assert _cells(measured, "vehicle")["1"][10] == "1.25"
 
 
-def test_events_newest_first_escaped_and_coloured() -> None:
+def test_events_show_conditions_then_the_log_newest_first_escaped_and_coloured() -> None:
     events = tuple(Event(t=float(k), level=lvl, text=txt) for k, (lvl, txt) in enumerate(
         [("info", "phase: hover"), ("warning", "vehicle 2: <stale>"), ("error", "oops")]))
-    html = events_html(snapshot(events=events))
-    assert html.index("oops") < html.index("&lt;stale&gt;") < html.index("phase: hover")
+    html = events_html(events, start=1.0)
+    top, log = html.split('data-gcs="event-log"')
+    assert top.index("oops") < top.index("&lt;stale&gt;") and "phase: hover" not in top
+    assert log.index("oops") < log.index("&lt;stale&gt;") < log.index("phase: hover")
     assert "#c0392b" in html and "#e67e22" in html
-    assert "no events" in events_html(snapshot())
-    assert "phase: hover" not in events_html(snapshot(events=events), limit=2)
+    assert re.search(r'data-level="info"><div[^>]*><span[^>]*>\s*-1.0 s</span> phase: hover<',
+                     log)
+    assert "no events" in events_html(())
+    assert "no warnings" in events_html(events[:1])
+
+
+def test_the_event_filter_hides_lower_levels_in_the_page() -> None:
+    html = event_filter_html()
+    assert re.findall(r'value="(\w+)"', html) == ["info", "warning", "error"]
+    assert 'value="info" checked' in html
+    assert ("input[value=error]:checked) [data-gcs=event-log] :is([data-level=info], "
+            "[data-level=warning]){display:none}") in html
 
 
 def test_history_keeps_a_window_of_distances_and_velocities() -> None:
@@ -186,3 +237,18 @@ def test_history_keeps_a_window_of_distances_and_velocities() -> None:
     np.testing.assert_allclose(s.vy[-1], -2.95)
     empty = History(VIEW).series()
     assert empty.distance.shape == (0, len(VIEW.edges)) and empty.vx.shape == (0, 4)
+
+
+def test_the_position_source_follows_the_team_frame() -> None:
+    """The simulator's team: its shared local frame; real autopilots (team_frame auto):
+    each placed through its GPS origin; an origin the GCS sets, said so."""
+    assert set(position_sources(TEAM).values()) == {"local NED (shared)"}
+    px4 = tuple(LinkConfig(sysid=vid, transport=f"udpin:0.0.0.0:{14550 + vid}", profile="px4")
+                for vid in (1, 2))
+    mixed = dataclasses.replace(TEAM, config=dataclasses.replace(TEAM.config, links=px4 + tuple(
+        LinkConfig(sysid=vid) for vid in (3, 4))))
+    assert position_sources(mixed) == {1: "local NED + GPS origin", 2: "local NED + GPS origin",
+                                       3: "local NED (shared)", 4: "local NED (shared)"}
+    told = dataclasses.replace(mixed, config=dataclasses.replace(
+        mixed.config, team_frame=dataclasses.replace(mixed.config.team_frame, mode="shared")))
+    assert set(position_sources(told).values()) == {"local NED (shared)"}

@@ -21,14 +21,19 @@ import viser
 from gcs.analysis import analyze
 from gcs.app import GcsApp, SimProcess, free_tcp_port
 from gcs.config import load_team
+from gcs.flightlog import FlightLog
 from gcs.loop import FleetState, OperatorCommand
 from gcs.transport import ZenohSettings
 from gcs.wire import SimTruth
+from tests.logfiles import ardupilot_log
 from web import SceneView, TeamView, Trails, WebUi, build_frame, palette, quad_mesh
 from web._actions import OperatorActions
+from web._camera import FOLLOW_STEP, FRAME_AGAIN_S, HANDS_OFF_S, MIN_VIEW_DISTANCE, team_view
 from web._control_lock import ControlLock
-from web._frame import SceneFrame
-from web._panel import FOLLOW_STEP, ControlPanel
+from web._frame import SceneFrame, frame_reach
+from web._panel import ControlPanel
+from web._replay_page import ReplayUi
+from web._scene import compass_at
 from web._viser_threads import LoopEvent, wake_on_loop
 from web.wireviewer import WireViewer, decode_window
 
@@ -104,6 +109,24 @@ def test_a_viewer_receives_the_team_where_it_is_and_right_way_up(
         payload = viewer.wait_for("/team/payload")
         assert payload["visible"] and tuple(payload["color"]) == tuple(palette.PAYLOAD)
         np.testing.assert_allclose(payload["position"], truth.payload_p_ned, atol=1e-6)
+        # on the ground: a metre scale along both axes, north and east named, the origin;
+        # the payload's drop line with its height halfway down; north beside the team
+        assert [viewer.wait_for(f"/ground/scale/{axis}{k}")["text"]
+                for axis in "ne" for k in (-4, 1, 5)] == ["-4 m", "1 m", "5 m"] * 2
+        np.testing.assert_allclose(viewer.wait_for("/ground/scale/n2")["position"], (2, 0, 0))
+        assert viewer.wait_for("/ground/axis_N")["text"] == "N"
+        assert viewer.wait_for("/ground/origin/label")["text"] == "origin"
+        drop = viewer.wait_for("/team/payload_drop")
+        assert drop["visible"]
+        np.testing.assert_allclose(drop["points"].reshape(-1, 2, 3)[0],
+                                   [[0.2, -0.1, -0.4], [0.2, -0.1, 0.0]], atol=1e-6)
+        height = viewer.wait_for("/team/payload_height")
+        assert height["visible"] and height["text"] == "0.40 m"
+        np.testing.assert_allclose(height["position"], (0.2, -0.1, -0.2), atol=1e-6)
+        compass = viewer.wait_for("/team/compass")
+        assert compass["visible"]
+        np.testing.assert_allclose(compass["position"],
+                                   compass_at(frame.centroid, frame_reach(frame)), atol=1e-6)
     finally:
         viewer.close()
 
@@ -301,34 +324,86 @@ def connected_client(server: viser.ViserServer, viewer: WireViewer) -> viser.Cli
     return client
 
 
-def test_following_the_team_keeps_the_viewers_angle_and_zoom(
+def wait_for_camera(camera: viser.CameraHandle, look_at: tuple[float, float, float]) -> None:
+    """Until the server holds the viewer's reported camera (it looks at ``look_at``)."""
+    deadline = time.monotonic() + 5.0
+    while not np.allclose(camera.look_at, look_at):
+        assert time.monotonic() < deadline, "the viewer's camera report did not arrive"
+        time.sleep(0.02)
+
+
+def test_the_camera_frames_the_team_then_follows_it_as_the_viewer_chose(
         server: viser.ViserServer) -> None:
+    """The first frame that knows the team frames it, wherever it is (a viewer that joined
+    with the team 3 m away looked at the origin); then the camera follows the team with
+    the viewer's own orbit, zoom and pan, noise apart; C frames it again."""
     viewer = WireViewer(server.get_port())
     try:
         client = connected_client(server, viewer)
         panel = ControlPanel(client, cast(OperatorActions, object()), ControlLock(),
                              on_control_change=lambda: None)
-        camera = client.camera
-        centroid = np.array([0.0, 0.0, -1.5])
-        panel.follow_camera(centroid)  # follow starts here
-        position, look_at = camera.position.copy(), camera.look_at.copy()
-        delta = np.array([0.5, -0.2, 0.1])
-        panel.follow_camera(centroid + delta)
-        np.testing.assert_allclose(camera.position, position + delta, atol=1e-9)
-        np.testing.assert_allclose(camera.look_at, look_at + delta, atol=1e-9)  # not 2 delta
+        view, camera = panel.view, client.camera
+        centroid = np.array([2.1, 2.2, -1.5])  # 3 m from the origin
+        view.update(None, 0.0)  # the team not known yet: the camera stays
+        np.testing.assert_allclose(camera.look_at, (0.0, 0.0, 0.0))
+        view.update(centroid, 0.7)
+        position, look_at = team_view(centroid, 0.7)
+        np.testing.assert_allclose(camera.look_at, centroid, atol=1e-9)
+        np.testing.assert_allclose(camera.position, position, atol=1e-9)
+        assert MIN_VIEW_DISTANCE <= np.linalg.norm(position - look_at) < 5.0
+        # a page still loading put its first camera back over the framing, and says so: it
+        # is framed again (not taken for the viewer's own view of the origin)
+        viewer.report_camera((-3.0, -1.0, -2.0), (0.0, 0.0, 0.0))
+        wait_for_camera(camera, (0.0, 0.0, 0.0))
+        view.update(centroid, 0.7)
+        time.sleep(FRAME_AGAIN_S)
+        view.update(centroid, 0.7)
+        np.testing.assert_allclose(camera.look_at, centroid, atol=1e-9)
+        np.testing.assert_allclose(camera.position, position, atol=1e-9)
 
-        # the viewer orbits and zooms; following moves that view, it does not undo it
+        delta = np.array([0.5, -0.2, 0.1])
+        view.update(centroid + delta, 0.7)
+        np.testing.assert_allclose(camera.position, position + delta, atol=1e-9)
+        np.testing.assert_allclose(camera.look_at, centroid + delta, atol=1e-9)  # not 2 delta
+
+        # a report the browser sent before it applied that move does not hold the camera
+        # back: the point looked at is the team's, not the report's plus the team's motion
+        viewer.report_camera(tuple(position), tuple(centroid))
+        wait_for_camera(camera, tuple(centroid))
+        view.update(centroid + 2 * delta, 0.7)
+        np.testing.assert_allclose(camera.look_at, centroid + 2 * delta, atol=1e-9)
+
+        # the viewer orbits, zooms and pans; following moves that view, it does not undo it,
+        # and it waits while the viewer's hand is on the camera
         viewer.report_camera((1.0, 4.0, -6.0), (0.5, 0.0, -1.0))
-        deadline = time.monotonic() + 5.0
-        while not np.allclose(camera.look_at, (0.5, 0.0, -1.0)):
-            assert time.monotonic() < deadline, "the viewer's camera report did not arrive"
-            time.sleep(0.02)
-        panel.follow_camera(centroid + 2 * delta)
+        wait_for_camera(camera, (0.5, 0.0, -1.0))
+        view.update(centroid + 2 * delta, 0.7)  # the viewer's view, kept
+        np.testing.assert_allclose(camera.look_at, (0.5, 0.0, -1.0), atol=1e-9)
+        view.update(centroid + 3 * delta, 0.7)  # the team moved, the viewer still drags
+        np.testing.assert_allclose(camera.look_at, (0.5, 0.0, -1.0), atol=1e-9)
+        time.sleep(HANDS_OFF_S)
+        view.update(centroid + 3 * delta, 0.7)
         np.testing.assert_allclose(camera.look_at - camera.position, (-0.5, -4.0, 5.0),
                                    atol=1e-9)
         np.testing.assert_allclose(camera.look_at, np.add((0.5, 0.0, -1.0), delta), atol=1e-9)
-        panel.follow_camera(centroid + 2 * delta + FOLLOW_STEP / 2)  # noise: stays put
+        view.update(centroid + 3 * delta + FOLLOW_STEP / 2, 0.7)  # noise: stays put
         np.testing.assert_allclose(camera.look_at, np.add((0.5, 0.0, -1.0), delta), atol=1e-9)
+
+        # centred again (C, the button): on the team, from the viewer's side of it
+        view.request_centre()
+        view.update(centroid + 3 * delta, 0.7)
+        np.testing.assert_allclose(camera.look_at, centroid + 3 * delta, atol=1e-9)
+        side = camera.position - camera.look_at
+        assert np.dot(side[:2], (-0.5, -4.0)) < 0.0  # the viewer's bearing: from +y
+        assert side[2] < 0.0 and np.linalg.norm(side) >= MIN_VIEW_DISTANCE  # above, far enough
+
+        # the team landed: a following camera panned off into the sky looks at it again
+        viewer.report_camera((9.0, 9.0, -9.0), (8.0, 8.0, -8.0))
+        wait_for_camera(camera, (8.0, 8.0, -8.0))
+        view.update(centroid, 0.7)
+        landed = centroid * [1.0, 1.0, 0.0]
+        view.update(landed, 0.7, reframe=True)
+        np.testing.assert_allclose(camera.look_at, landed, atol=1e-9)
     finally:
         viewer.close()
 
@@ -412,3 +487,29 @@ def test_a_slow_page_never_delays_the_loop(monkeypatch: pytest.MonkeyPatch, how:
         finally:
             viewer.close()
             ui.close()
+
+
+def test_the_replay_frames_and_follows_the_team_for_each_viewer(tmp_path: Path) -> None:
+    """A recorded team flying north 4-7 m from the origin: a viewer of its replay looks at
+    it (the replay had no follow: its camera looked at the origin), and at the team's new
+    place after a jump."""
+    log = FlightLog.load(ardupilot_log(tmp_path / "ap.tlog", shared_origin=True))
+    ui = ReplayUi(log, name="ap", port=free_tcp_port())
+    ui.start()
+    viewer = WireViewer(ui.server.get_port())
+    try:
+        camera = connected_client(ui.server, viewer).camera
+        for after in (2.0, 5.0):
+            t = ui.timeline.start + after
+            ui.seek(t)
+            p = ui.cursor.fleet(t).p_ned
+            team = p[np.isfinite(p).all(axis=1)].mean(axis=0)
+            assert np.hypot(*team[:2]) > 4.0
+            deadline = time.monotonic() + 5.0
+            while not np.allclose(camera.look_at, team, atol=1e-6):
+                assert time.monotonic() < deadline, (after, camera.look_at, team)
+                time.sleep(0.02)
+            assert np.linalg.norm(camera.position - team) < 12.0  # a line of three, 6 m wide
+    finally:
+        viewer.close()
+        ui.close()

@@ -21,6 +21,10 @@ Modules:
                          modes, INDI.
     ``_outcomes``        Outcomes of a request to the onboard autopilot: accepted, or denied
                          and why.
+    ``_params``          The parameters of a simulated vehicle: its autopilot's real tunables,
+                         under PX4's names.
+    ``_px4_modes``       The PX4 face of one vehicle's modes: the mode its HEARTBEAT reports,
+                         and what a PX4 mode request does.
     ``_quaternion``      Quaternion and Euler-angle helpers shared by the autopilot and the
                          physics.
     ``_references``      Acceleration references nu_a of the autopilot's own modes.

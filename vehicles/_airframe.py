@@ -14,11 +14,17 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from gcs.common import ConfigError, field, from_mapping, load_yaml, shipped_config
+from gcs.common import (
+    STANDARD_GRAVITY,
+    ConfigError,
+    field,
+    from_mapping,
+    load_yaml,
+    shipped_config,
+)
 
 __all__ = ["BEBOP2", "Airframe", "bebop2", "check_airframe", "load_airframe"]
 
-STANDARD_GRAVITY = 9.80665
 """m/s^2: the weight an airframe must lift to hover (a team's own gravity is checked by the
 GCS's analysis)."""
 

@@ -22,11 +22,13 @@ from vehicles._kernel import autopilot_step
 from vehicles._outcomes import Denial, RequestOutcome
 from vehicles._quaternion import euler_from_quaternions
 from vehicles._state import (
+    SHARED_SETTINGS,
     AutopilotParams,
     AutopilotState,
     Measurements,
     make_autopilot_params,
     make_autopilot_state,
+    write_vehicle_params,
 )
 from vehicles._transitions import (
     enter_armed_hold,
@@ -47,7 +49,9 @@ class Autopilot:
 
     ``airframe`` is the autopilot's model of the vehicle (mass, thrust
     coefficient, geometry, rotor time constant); it may differ from the
-    simulated truth, which is the point of INDI.
+    simulated truth, which is the point of INDI. ``config`` is every vehicle's
+    configuration at the start; each vehicle's own can change later
+    (:meth:`configure`, what PARAM_SET does).
     """
 
     def __init__(self, airframe: Airframe, config: AutopilotConfig, n_vehicles: int) -> None:
@@ -55,8 +59,11 @@ class Autopilot:
             raise ValueError(f"need at least one vehicle, got {n_vehicles}")
         self.airframe = airframe
         self.config = config
+        """The configuration every vehicle started with (see :meth:`vehicle_config`)."""
+        self._configs = [config] * n_vehicles
         self.state: AutopilotState = make_autopilot_state(n_vehicles)
-        self.params: AutopilotParams = make_autopilot_params(airframe, config)
+        self.params: AutopilotParams = make_autopilot_params(airframe, config, n_vehicles)
+        _load_mode_entries()
 
     # -- stepping -----------------------------------------------------------------------------
 
@@ -81,6 +88,43 @@ class Autopilot:
         :meth:`sim.World.run`, which calls the same kernel in lockstep."""
         autopilot_step(self.state, self.params, measurements)
         return self.state.rotor_speed_cmd.copy()
+
+    # -- configuration ------------------------------------------------------------------------
+
+    def vehicle_config(self, i: int) -> AutopilotConfig:
+        """Vehicle ``i``'s configuration now."""
+        return self._configs[self._index(i)]
+
+    def configure(self, i: int, config: AutopilotConfig) -> None:
+        """Fly vehicle ``i`` with ``config`` from the next control period on.
+
+        Every gain, limit and timeout may change in flight; the loop rate and the filter
+        cutoffs (:data:`vehicles._state.SHARED_SETTINGS`) are the whole team's, and a
+        ``config`` that changes them raises ValueError.
+        """
+        i = self._index(i)
+        for name in SHARED_SETTINGS:
+            if getattr(config, name) != getattr(self.config, name):
+                raise ValueError(f"{name} is shared by every vehicle and cannot change")
+        write_vehicle_params(self.params, i, self.airframe, config)
+        self._configs[i] = config
+
+    def origin_ned(self, i: int) -> np.ndarray:
+        """Vehicle ``i``'s local origin in the sensor frame, m (copy)."""
+        return self.state.origin_ned[self._index(i)].copy()
+
+    def set_origin(self, i: int, origin_ned: np.ndarray | tuple[float, float, float]
+                   ) -> RequestOutcome:
+        """Re-base vehicle ``i``'s local frame on ``origin_ned`` (sensor frame, m), as an EKF
+        takes a new origin; refused while armed (the hold points would jump)."""
+        i = self._index(i)
+        origin = _finite_vector(origin_ned, 3, "origin_ned")
+        s = self.state
+        if s.mode[i] != SimMode.DISARMED:
+            return RequestOutcome(False, Denial.ARMED)
+        s.p_est[i] -= origin - s.origin_ned[i]  # the estimate moves at once, not at next pose
+        s.origin_ned[i] = origin
+        return _ACCEPTED
 
     # -- commands (later COMMAND_LONG -> COMMAND_ACK) -------------------------------------------
 
@@ -107,7 +151,7 @@ class Autopilot:
         i = self._index(i)
         if self.state.mode[i] == SimMode.DISARMED:
             return RequestOutcome(False, Denial.DISARMED)
-        if not altitude > self.config.ground_clearance or not math.isfinite(altitude):
+        if not altitude > self._configs[i].ground_clearance or not math.isfinite(altitude):
             return RequestOutcome(False, Denial.BAD_ALTITUDE)
         enter_takeoff(self.state, i, float(altitude))
         return _ACCEPTED
@@ -133,7 +177,7 @@ class Autopilot:
         i = self._index(i)
         if self.state.mode[i] == SimMode.DISARMED:
             return RequestOutcome(False, Denial.DISARMED)
-        if self.t - self.state.sp_time[i] > self.config.setpoint_timeout:
+        if self.t - self.state.sp_time[i] > self._configs[i].setpoint_timeout:
             return RequestOutcome(False, Denial.NO_SETPOINT_STREAM)
         enter_offboard(self.state, i)
         return _ACCEPTED
@@ -222,7 +266,7 @@ class Autopilot:
     def _in_flight(self, i: int) -> bool:
         s = self.state
         return bool(s.mode[i] != SimMode.DISARMED
-                    and s.z_home[i] - s.p_est[i, 2] >= self.config.ground_clearance)
+                    and s.z_home[i] - s.p_est[i, 2] >= self._configs[i].ground_clearance)
 
     def _store_setpoint(self, i: int, kind: SetpointKind, accel_ned: np.ndarray, z_ned: float,
                         yaw: float | None) -> None:
@@ -241,3 +285,19 @@ def _finite_vector(value: np.ndarray | tuple[float, ...], size: int, name: str) 
     if a.shape != (size,) or not np.all(np.isfinite(a)):
         raise ValueError(f"{name} must be {size} finite numbers, got {value!r}")
     return a
+
+
+def _load_mode_entries() -> None:
+    """Compile or load the mode entries the commands call, now, on a scratch vehicle.
+
+    Called from Python, each is compiled at its first use: at the first arm, take-off,
+    offboard and landing, the simulator stood still 0.35-0.6 s each (cold cache), every
+    vehicle's telemetry went stale at each phase change and the GCS warned four times.
+    """
+    scratch = make_autopilot_state(1)
+    enter_armed_hold(scratch, 0)
+    enter_takeoff(scratch, 0, 1.0)
+    enter_offboard(scratch, 0)
+    enter_hold(scratch, 0)
+    enter_land(scratch, 0)
+    enter_disarmed(scratch, 0)

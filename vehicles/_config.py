@@ -47,6 +47,9 @@ class AutopilotConfig:
                            default=2.2, gt=0.0)
     climb_rate: float = field(doc="TAKEOFF climb speed, m/s", default=0.5, gt=0.0)
     land_speed: float = field(doc="LAND descent speed, m/s", default=0.4, gt=0.0)
+    takeoff_altitude: float = field(
+        doc="climb of a take-off that names no altitude (PX4's AUTO.TAKEOFF mode, NAV_TAKEOFF "
+            "with param7 NaN), m above the arming point", default=1.5, gt=0.0)
     takeoff_tolerance: float = field(
         doc="TAKEOFF ends in HOLD once within this distance of the target altitude, m",
         default=0.05, gt=0.0)

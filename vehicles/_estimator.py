@@ -3,7 +3,8 @@
 The attitude INDI runs at 512 Hz but motion capture arrives slower, so the
 attitude is propagated with the gyro every step and pulled a fixed fraction
 towards each new pose sample (a complementary filter, the "KF attitude" block
-of the paper's figure 2). Position and velocity are the latest pose sample.
+of the paper's figure 2). Position and velocity are the latest pose sample, the
+position taken relative to the vehicle's local origin (its EKF origin).
 """
 
 from __future__ import annotations
@@ -25,11 +26,11 @@ def estimate_step(s: AutopilotState, prm: AutopilotParams, meas: Measurements) -
                                         s.q_est[i, 3], meas.gyro_body[i, 0],
                                         meas.gyro_body[i, 1], meas.gyro_body[i, 2], prm.dt)
         if meas.pose_seq[i] != s.pose_seq_seen[i]:
-            k = 1.0 if s.pose_seq_seen[i] == 0 else prm.attitude_correction_gain
+            k = 1.0 if s.pose_seq_seen[i] == 0 else prm.attitude_correction_gain[i]
             qw, qx, qy, qz = _nlerp(qw, qx, qy, qz, meas.q_wxyz[i, 0], meas.q_wxyz[i, 1],
                                     meas.q_wxyz[i, 2], meas.q_wxyz[i, 3], k)
             for k3 in range(3):
-                s.p_est[i, k3] = meas.p_ned[i, k3]
+                s.p_est[i, k3] = meas.p_ned[i, k3] - s.origin_ned[i, k3]
                 s.v_est[i, k3] = meas.v_ned[i, k3]
             s.pose_seq_seen[i] = meas.pose_seq[i]
         s.q_est[i, 0] = qw

@@ -116,21 +116,21 @@ def _mode_timers(s: AutopilotState, prm: AutopilotParams) -> None:
     t = s.t[0]
     for i in range(s.mode.shape[0]):
         mode = s.mode[i]
-        if mode == _OFFBOARD and t - s.sp_time[i] > prm.setpoint_timeout:
+        if mode == _OFFBOARD and t - s.sp_time[i] > prm.setpoint_timeout[i]:
             enter_hold(s, i)
-        elif mode == _HOLD and t - s.hold_start[i] > prm.hold_timeout:
+        elif mode == _HOLD and t - s.hold_start[i] > prm.hold_timeout[i]:
             enter_land(s, i)
         elif mode == _TAKEOFF:
-            s.z_ref[i] = climb_ramp(s.z_ref[i], s.z_target[i], prm.climb_rate, prm.dt)
+            s.z_ref[i] = climb_ramp(s.z_ref[i], s.z_target[i], prm.climb_rate[i], prm.dt)
             if (s.z_ref[i] == s.z_target[i]
-                    and abs(s.p_est[i, 2] - s.z_target[i]) < prm.takeoff_tolerance):
+                    and abs(s.p_est[i, 2] - s.z_target[i]) < prm.takeoff_tolerance[i]):
                 s.mode[i] = _HOLD  # keep holding the takeoff point, now at the target altitude
                 s.hold_start[i] = t
                 s.p_hold[i, 2] = s.z_target[i]
         elif mode == _LAND:
-            if s.z_home[i] - s.p_est[i, 2] < prm.ground_clearance:
+            if s.z_home[i] - s.p_est[i, 2] < prm.ground_clearance[i]:
                 s.touchdown_timer[i] += prm.dt
-                if s.touchdown_timer[i] >= prm.touchdown_time:
+                if s.touchdown_timer[i] >= prm.touchdown_time[i]:
                     enter_disarmed(s, i)
             else:
                 s.touchdown_timer[i] = 0.0
@@ -143,29 +143,31 @@ def _references(s: AutopilotState, prm: AutopilotParams) -> None:
         mode = s.mode[i]
         pz, vz = s.p_est[i, 2], s.v_est[i, 2]
         if _activity(mode, s.z_home[i], s.p_hold[i, 2], pz,
-                     prm.ground_clearance) != _FLY:
+                     prm.ground_clearance[i]) != _FLY:
             nu_x = nu_y = nu_z = 0.0
         elif mode == _OFFBOARD:
             nu_x, nu_y = s.sp_accel_ned[i, 0], s.sp_accel_ned[i, 1]
             if s.sp_kind[i] == _ACCEL:
                 nu_z = s.sp_accel_ned[i, 2]
             else:
-                nu_z = altitude_pd(pz, vz, s.sp_z_ned[i], 0.0, prm.altitude_kp,
-                                   prm.altitude_kv)
+                nu_z = altitude_pd(pz, vz, s.sp_z_ned[i], 0.0, prm.altitude_kp[i],
+                                   prm.altitude_kv[i])
         else:
             nu_x, nu_y = position_hold(s.p_est[i, 0], s.p_est[i, 1], s.v_est[i, 0],
                                        s.v_est[i, 1], s.p_hold[i, 0], s.p_hold[i, 1],
-                                       prm.hold_kp, prm.hold_kv)
+                                       prm.hold_kp[i], prm.hold_kv[i])
             if mode == _TAKEOFF:
                 vz_ref = 0.0
                 if s.z_ref[i] != s.z_target[i]:
-                    vz_ref = -prm.climb_rate if s.z_target[i] < s.z_ref[i] else prm.climb_rate
-                nu_z = altitude_pd(pz, vz, s.z_ref[i], vz_ref, prm.altitude_kp, prm.altitude_kv)
+                    vz_ref = (-prm.climb_rate[i] if s.z_target[i] < s.z_ref[i]
+                              else prm.climb_rate[i])
+                nu_z = altitude_pd(pz, vz, s.z_ref[i], vz_ref, prm.altitude_kp[i],
+                                   prm.altitude_kv[i])
             elif mode == _LAND:
-                nu_z = prm.altitude_kv * (prm.land_speed - vz)
+                nu_z = prm.altitude_kv[i] * (prm.land_speed[i] - vz)
             else:
-                nu_z = altitude_pd(pz, vz, s.p_hold[i, 2], 0.0, prm.altitude_kp,
-                                   prm.altitude_kv)
+                nu_z = altitude_pd(pz, vz, s.p_hold[i, 2], 0.0, prm.altitude_kp[i],
+                                   prm.altitude_kv[i])
         s.accel_ref_ned[i, 0] = nu_x
         s.accel_ref_ned[i, 1] = nu_y
         s.accel_ref_ned[i, 2] = nu_z
@@ -175,14 +177,14 @@ def _references(s: AutopilotState, prm: AutopilotParams) -> None:
 def _acceleration_indi(s: AutopilotState, prm: AutopilotParams) -> None:
     """Eq. (inca) on the filtered signals: commanded roll, pitch, yaw and total thrust."""
     rotor_max = prm.thrust_coefficient * prm.rotor_speed_max**2
-    rotor_idle = prm.thrust_coefficient * prm.rotor_speed_idle**2
-    bank = prm.bank_max
     for i in range(s.mode.shape[0]):
+        rotor_idle = prm.thrust_coefficient * prm.rotor_speed_idle[i]**2
+        bank = prm.bank_max[i]
         if s.mode[i] == _OFFBOARD and not math.isnan(s.sp_yaw[i]):
             s.yaw_hold[i] = s.sp_yaw[i]
         s.attitude_cmd[i, 2] = s.yaw_hold[i]
         activity = _activity(s.mode[i], s.z_home[i], s.p_hold[i, 2], s.p_est[i, 2],
-                             prm.ground_clearance)
+                             prm.ground_clearance[i])
         if activity != _FLY:
             s.attitude_cmd[i, 0] = 0.0
             s.attitude_cmd[i, 1] = 0.0
@@ -191,17 +193,17 @@ def _acceleration_indi(s: AutopilotState, prm: AutopilotParams) -> None:
         yaw = quat_to_euler(s.q_est[i, 0], s.q_est[i, 1], s.q_est[i, 2], s.q_est[i, 3])[2]
         roll_f, pitch_f = s.accel_filtered[i, 3], s.accel_filtered[i, 4]
         thrust_f = s.accel_filtered[i, 5]
-        lim = prm.accel_error_max_xy
+        lim = prm.accel_error_max_xy[i]
         ex = min(lim, max(-lim, s.accel_ref_ned[i, 0] - s.accel_filtered[i, 0]))
         ey = min(lim, max(-lim, s.accel_ref_ned[i, 1] - s.accel_filtered[i, 1]))
-        ez = min(prm.accel_error_max_z,
-                 max(-prm.accel_error_max_z, s.accel_ref_ned[i, 2] - s.accel_filtered[i, 2]))
-        level = s.z_home[i] - s.p_est[i, 2] < prm.ground_clearance
+        ez = min(prm.accel_error_max_z[i],
+                 max(-prm.accel_error_max_z[i], s.accel_ref_ned[i, 2] - s.accel_filtered[i, 2]))
+        level = s.z_home[i] - s.p_est[i, 2] < prm.ground_clearance[i]
         if level:
             ex = 0.0
             ey = 0.0
         d_roll, d_pitch, d_thrust_z = acceleration_increment(
-            roll_f, pitch_f, yaw, -max(thrust_f, prm.thrust_floor), prm.mass, ex, ey, ez)
+            roll_f, pitch_f, yaw, -max(thrust_f, prm.thrust_floor[i]), prm.mass, ex, ey, ez)
         s.attitude_cmd[i, 0] = 0.0 if level else min(bank, max(-bank, roll_f + d_roll))
         s.attitude_cmd[i, 1] = 0.0 if level else min(bank, max(-bank, pitch_f + d_pitch))
         s.thrust_cmd[i] = min(4.0 * rotor_max, max(4.0 * rotor_idle, thrust_f - d_thrust_z))
@@ -212,10 +214,10 @@ def _attitude_indi(s: AutopilotState, prm: AutopilotParams, meas: Measurements) 
     """Rotor speed commands from the attitude and thrust commands, then the actuator model."""
     kf = prm.thrust_coefficient
     rotor_max = kf * prm.rotor_speed_max**2
-    rotor_idle = kf * prm.rotor_speed_idle**2
     for i in range(s.mode.shape[0]):
+        rotor_idle = kf * prm.rotor_speed_idle[i]**2
         activity = _activity(s.mode[i], s.z_home[i], s.p_hold[i, 2], s.p_est[i, 2],
-                             prm.ground_clearance)
+                             prm.ground_clearance[i])
         if activity == _OFF:
             for j in range(4):
                 s.rotor_speed_cmd[i, j] = 0.0
@@ -223,7 +225,7 @@ def _attitude_indi(s: AutopilotState, prm: AutopilotParams, meas: Measurements) 
             continue
         if activity == _IDLE:
             for j in range(4):
-                s.rotor_speed_cmd[i, j] = prm.rotor_speed_idle
+                s.rotor_speed_cmd[i, j] = prm.rotor_speed_idle[i]
         else:
             qw, qx, qy, qz = s.q_est[i, 0], s.q_est[i, 1], s.q_est[i, 2], s.q_est[i, 3]
             cw, cx, cy, cz = euler_to_quat(s.attitude_cmd[i, 0], s.attitude_cmd[i, 1],
@@ -232,11 +234,12 @@ def _attitude_indi(s: AutopilotState, prm: AutopilotParams, meas: Measurements) 
             if ew < 0.0:
                 ex, ey, ez = -ex, -ey, -ez
             # Angular acceleration reference minus the derivative of the filtered gyro.
-            d_alpha_x = (prm.attitude_gain[0] * 2.0 * ex - prm.rate_gain[0] * meas.gyro_body[i, 0]
+            ka, kr = prm.attitude_gain, prm.rate_gain
+            d_alpha_x = (ka[i, 0] * 2.0 * ex - kr[i, 0] * meas.gyro_body[i, 0]
                          - (s.rate_filtered[i, 0] - s.rate_filtered_prev[i, 0]) / prm.dt)
-            d_alpha_y = (prm.attitude_gain[1] * 2.0 * ey - prm.rate_gain[1] * meas.gyro_body[i, 1]
+            d_alpha_y = (ka[i, 1] * 2.0 * ey - kr[i, 1] * meas.gyro_body[i, 1]
                          - (s.rate_filtered[i, 1] - s.rate_filtered_prev[i, 1]) / prm.dt)
-            d_alpha_z = (prm.attitude_gain[2] * 2.0 * ez - prm.rate_gain[2] * meas.gyro_body[i, 2]
+            d_alpha_z = (ka[i, 2] * 2.0 * ez - kr[i, 2] * meas.gyro_body[i, 2]
                          - (s.rate_filtered[i, 2] - s.rate_filtered_prev[i, 2]) / prm.dt)
             thrust_inner_f = (s.rate_filtered[i, 3] + s.rate_filtered[i, 4]
                               + s.rate_filtered[i, 5] + s.rate_filtered[i, 6])

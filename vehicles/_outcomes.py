@@ -17,6 +17,7 @@ class Denial(Enum):
     """Why a command was refused; the value is the operator-facing text."""
 
     DISARMED = "vehicle is disarmed"
+    ARMED = "vehicle is armed"
     IN_FLIGHT = "vehicle is in flight"
     NO_POSE = "no position measurement received yet"
     NO_SETPOINT_STREAM = "no setpoint received within the setpoint timeout"

@@ -13,6 +13,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from gcs.common import STANDARD_GRAVITY
 from gcs.wire import SetpointKind, SimMode
 from vehicles._airframe import Airframe
 from vehicles._butterworth import butterworth2
@@ -23,15 +24,17 @@ __all__ = [
     "ACCEL_SIGNALS",
     "GRAVITY",
     "RATE_SIGNALS",
+    "SHARED_SETTINGS",
     "AutopilotParams",
     "AutopilotState",
     "Measurements",
     "make_autopilot_params",
     "make_autopilot_state",
     "make_measurements",
+    "write_vehicle_params",
 ]
 
-GRAVITY = 9.81
+GRAVITY = STANDARD_GRAVITY  # one gravity for the autopilot, the simulator and the analysis
 """Gravity the autopilot assumes, m/s^2."""
 
 ACCEL_SIGNALS = ("accel_n", "accel_e", "accel_d", "roll", "pitch", "thrust")
@@ -50,7 +53,9 @@ class Measurements(NamedTuple):
     gyro_body: np.ndarray
     """(N, 3) gyro: body rates, rad/s."""
     p_ned: np.ndarray
-    """(N, 3) measured position (motion capture), m."""
+    """(N, 3) measured position (motion capture or GNSS), m, in the sensor frame: the world's
+    NED frame, which each autopilot ties to its own local frame by its origin
+    (:attr:`AutopilotState.origin_ned`)."""
     v_ned: np.ndarray
     """(N, 3) measured velocity, m/s."""
     q_wxyz: np.ndarray
@@ -78,7 +83,10 @@ class AutopilotState(NamedTuple):
     q_est: np.ndarray
     """(N, 4) attitude estimate (gyro propagation corrected by pose samples)."""
     p_est: np.ndarray
-    """(N, 3) position estimate (latest pose sample), m."""
+    """(N, 3) position estimate (latest pose sample), m, in the vehicle's local frame."""
+    origin_ned: np.ndarray
+    """(N, 3) the vehicle's local origin in the sensor frame, m: its local NED frame is the
+    sensor frame shifted there (a real autopilot's EKF origin). Zero: the frames agree."""
     v_est: np.ndarray
     """(N, 3) velocity estimate (latest pose sample), m/s."""
     pose_seq_seen: np.ndarray
@@ -136,7 +144,7 @@ def make_autopilot_state(n_vehicles: int) -> AutopilotState:
     q[:, 0] = 1.0
     return AutopilotState(
         t=np.zeros(1), mode=np.full(n, int(SimMode.DISARMED), dtype=np.int64), q_est=q,
-        p_est=np.zeros((n, 3)), v_est=np.zeros((n, 3)),
+        p_est=np.zeros((n, 3)), origin_ned=np.zeros((n, 3)), v_est=np.zeros((n, 3)),
         pose_seq_seen=np.zeros(n, dtype=np.int64),
         accel_filter=np.zeros((n, len(ACCEL_SIGNALS), 2)),
         accel_filtered=np.zeros((n, len(ACCEL_SIGNALS))),
@@ -153,14 +161,18 @@ def make_autopilot_state(n_vehicles: int) -> AutopilotState:
 
 
 class AutopilotParams(NamedTuple):
-    """Constants of the kernel, derived from the airframe model and the configuration."""
+    """Constants of the kernel, derived from the airframe model and the configuration.
+
+    The airframe's and the loop's are shared; the tunable ones are (N,) arrays (gains
+    (N, 3)), row ``i`` vehicle ``i``'s, so each vehicle's parameters can be set on their
+    own (PARAM_SET) while the team flies.
+    """
 
     dt: float
     gravity: float
     mass: float
     thrust_coefficient: float
     rotor_speed_max: float
-    rotor_speed_idle: float
     actuator_alpha: float
     """per-step gain of the first-order actuator model, 1 - exp(-dt / tau)."""
     inertia: np.ndarray
@@ -168,50 +180,74 @@ class AutopilotParams(NamedTuple):
     """(4, 4) inverse of :func:`vehicles._rotors.effectiveness_matrix`."""
     accel_coef: np.ndarray
     rate_coef: np.ndarray
+    rotor_speed_idle: np.ndarray
     attitude_gain: np.ndarray
+    """(N, 3)."""
     rate_gain: np.ndarray
-    bank_max: float
-    accel_error_max_xy: float
-    accel_error_max_z: float
-    altitude_kp: float
-    altitude_kv: float
-    hold_kp: float
-    hold_kv: float
-    climb_rate: float
-    land_speed: float
-    takeoff_tolerance: float
-    setpoint_timeout: float
-    hold_timeout: float
-    ground_clearance: float
-    touchdown_time: float
-    thrust_floor: float
-    attitude_correction_gain: float
+    """(N, 3)."""
+    bank_max: np.ndarray
+    accel_error_max_xy: np.ndarray
+    accel_error_max_z: np.ndarray
+    altitude_kp: np.ndarray
+    altitude_kv: np.ndarray
+    hold_kp: np.ndarray
+    hold_kv: np.ndarray
+    climb_rate: np.ndarray
+    land_speed: np.ndarray
+    takeoff_tolerance: np.ndarray
+    setpoint_timeout: np.ndarray
+    hold_timeout: np.ndarray
+    ground_clearance: np.ndarray
+    touchdown_time: np.ndarray
+    thrust_floor: np.ndarray
+    attitude_correction_gain: np.ndarray
 
 
-def make_autopilot_params(airframe: Airframe, config: AutopilotConfig) -> AutopilotParams:
-    """Kernel constants for an airframe model (the autopilot's belief, not the truth)."""
+SHARED_SETTINGS = ("rate_hz", "accel_filter_cutoff_hz", "rate_filter_cutoff_hz")
+"""Configuration fields every vehicle of one :class:`AutopilotParams` shares (the loop
+period and the filter coefficients): :func:`write_vehicle_params` cannot change them."""
+
+
+def make_autopilot_params(airframe: Airframe, config: AutopilotConfig,
+                          n_vehicles: int = 1) -> AutopilotParams:
+    """Kernel constants for an airframe model (the autopilot's belief, not the truth), every
+    vehicle with ``config``."""
     dt = 1.0 / config.rate_hz
-    return AutopilotParams(
+    n = n_vehicles
+    prm = AutopilotParams(
         dt=dt, gravity=GRAVITY, mass=float(airframe.mass),
         thrust_coefficient=float(airframe.thrust_coefficient),
         rotor_speed_max=float(airframe.rotor_speed_max),
-        rotor_speed_idle=float(airframe.rotor_speed_max * math.sqrt(config.idle_thrust_fraction)),
         actuator_alpha=1.0 - math.exp(-dt / airframe.rotor_time_constant),
         inertia=np.array(airframe.inertia, dtype=np.float64),
         effectiveness_inv=np.linalg.inv(effectiveness_matrix(airframe)),
         accel_coef=butterworth2(config.accel_filter_cutoff_hz, config.rate_hz),
         rate_coef=butterworth2(config.rate_filter_cutoff_hz, config.rate_hz),
-        attitude_gain=np.array(config.attitude_gain, dtype=np.float64),
-        rate_gain=np.array(config.rate_gain, dtype=np.float64),
-        bank_max=math.radians(config.bank_max_deg),
-        accel_error_max_xy=float(config.accel_error_max_xy),
-        accel_error_max_z=float(config.accel_error_max_z),
-        altitude_kp=float(config.altitude_kp), altitude_kv=float(config.altitude_kv),
-        hold_kp=float(config.hold_kp), hold_kv=float(config.hold_kv),
-        climb_rate=float(config.climb_rate), land_speed=float(config.land_speed),
-        takeoff_tolerance=float(config.takeoff_tolerance),
-        setpoint_timeout=float(config.setpoint_timeout), hold_timeout=float(config.hold_timeout),
-        ground_clearance=float(config.ground_clearance),
-        touchdown_time=float(config.touchdown_time),
-        thrust_floor=float(config.thrust_floor_fraction * airframe.mass * GRAVITY),
-        attitude_correction_gain=float(config.attitude_correction_gain))
+        rotor_speed_idle=np.zeros(n), attitude_gain=np.zeros((n, 3)),
+        rate_gain=np.zeros((n, 3)), bank_max=np.zeros(n), accel_error_max_xy=np.zeros(n),
+        accel_error_max_z=np.zeros(n), altitude_kp=np.zeros(n), altitude_kv=np.zeros(n),
+        hold_kp=np.zeros(n), hold_kv=np.zeros(n), climb_rate=np.zeros(n),
+        land_speed=np.zeros(n), takeoff_tolerance=np.zeros(n), setpoint_timeout=np.zeros(n),
+        hold_timeout=np.zeros(n), ground_clearance=np.zeros(n), touchdown_time=np.zeros(n),
+        thrust_floor=np.zeros(n), attitude_correction_gain=np.zeros(n))
+    for i in range(n):
+        write_vehicle_params(prm, i, airframe, config)
+    return prm
+
+
+def write_vehicle_params(prm: AutopilotParams, i: int, airframe: Airframe,
+                         config: AutopilotConfig) -> None:
+    """Give vehicle ``i`` the tunable constants of ``config`` (its :data:`SHARED_SETTINGS`
+    are not read: they belong to every vehicle)."""
+    for name in _AS_CONFIGURED:
+        getattr(prm, name)[i] = getattr(config, name)
+    prm.rotor_speed_idle[i] = airframe.rotor_speed_max * math.sqrt(config.idle_thrust_fraction)
+    prm.bank_max[i] = math.radians(config.bank_max_deg)
+    prm.thrust_floor[i] = config.thrust_floor_fraction * airframe.mass * GRAVITY
+
+
+_AS_CONFIGURED = ("attitude_gain", "rate_gain", "accel_error_max_xy", "accel_error_max_z",
+                  "altitude_kp", "altitude_kv", "hold_kp", "hold_kv", "climb_rate", "land_speed",
+                  "takeoff_tolerance", "setpoint_timeout", "hold_timeout", "ground_clearance",
+                  "touchdown_time", "attitude_correction_gain")
+"""Kernel constants that are the configuration field of the same name, unchanged."""

@@ -20,7 +20,8 @@ __all__ = ["DEFAULT_RATES_HZ", "IntervalRequest", "StreamSchedule", "TelemetryMe
 
 
 class TelemetryMessage(Enum):
-    """Messages the simulated vehicle streams; the value is the MAVLink message id."""
+    """Messages the simulated vehicle sends by itself, streamed or on request
+    (``MAV_CMD_REQUEST_MESSAGE``); the value is the MAVLink message id."""
 
     HEARTBEAT = mavlink.MAVLINK_MSG_ID_HEARTBEAT
     LOCAL_POSITION_NED = mavlink.MAVLINK_MSG_ID_LOCAL_POSITION_NED
@@ -28,6 +29,11 @@ class TelemetryMessage(Enum):
     ATTITUDE_QUATERNION = mavlink.MAVLINK_MSG_ID_ATTITUDE_QUATERNION
     HIGHRES_IMU = mavlink.MAVLINK_MSG_ID_HIGHRES_IMU
     SYS_STATUS = mavlink.MAVLINK_MSG_ID_SYS_STATUS
+    GPS_RAW_INT = mavlink.MAVLINK_MSG_ID_GPS_RAW_INT
+    GLOBAL_POSITION_INT = mavlink.MAVLINK_MSG_ID_GLOBAL_POSITION_INT
+    HOME_POSITION = mavlink.MAVLINK_MSG_ID_HOME_POSITION
+    GPS_GLOBAL_ORIGIN = mavlink.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN
+    AUTOPILOT_VERSION = mavlink.MAVLINK_MSG_ID_AUTOPILOT_VERSION
 
 
 DEFAULT_RATES_HZ: Mapping[TelemetryMessage, float] = MappingProxyType({
@@ -37,15 +43,21 @@ DEFAULT_RATES_HZ: Mapping[TelemetryMessage, float] = MappingProxyType({
     TelemetryMessage.ATTITUDE_QUATERNION: 10.0,
     TelemetryMessage.HIGHRES_IMU: 10.0,
     TelemetryMessage.SYS_STATUS: 2.0,
+    TelemetryMessage.GPS_RAW_INT: 5.0,
+    TelemetryMessage.GLOBAL_POSITION_INT: 10.0,
+    TelemetryMessage.HOME_POSITION: 0.0,
+    TelemetryMessage.GPS_GLOBAL_ORIGIN: 0.0,
+    TelemetryMessage.AUTOPILOT_VERSION: 0.0,
 })
-"""Rates (Hz of sim time) until the GCS asks otherwise; 0 means not streamed."""
+"""Rates (Hz of sim time) until the GCS asks otherwise; 0 means not streamed (HOME_POSITION
+and GPS_GLOBAL_ORIGIN go out when they change, all three on request)."""
 
 
 class IntervalRequest(Enum):
     """Outcome of a SET_MESSAGE_INTERVAL request."""
 
     SET = "rate set"
-    NOT_STREAMED = "not a message this vehicle streams"
+    NOT_STREAMED = "not a message this vehicle sends"
     BAD_INTERVAL = "interval must be -1, 0 or > 0 us"
 
 

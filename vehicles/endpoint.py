@@ -8,8 +8,17 @@ contract in ``gcs/link/README.md``) lives here, between the bytes and the
 - a MAVLink 2 system with its own system id, component 1; frames addressed
   to another system or component are counted and ignored, bad bytes are
   counted and dropped (the decoder never raises);
-- HEARTBEAT (1 Hz, and at once after every mode change), telemetry at rates
-  set by ``SET_MESSAGE_INTERVAL`` (:mod:`vehicles._streams`), times from sim time;
+- PX4's identity: HEARTBEAT as PX4 sends it (autopilot PX4, its custom main
+  and sub modes, :mod:`vehicles._px4_modes`; 1 Hz, and at once after every mode
+  change), AUTOPILOT_VERSION on request, mode changes by DO_SET_MODE or SET_MODE
+  with PX4's modes;
+- telemetry at rates set by ``SET_MESSAGE_INTERVAL`` or once by
+  ``REQUEST_MESSAGE`` (:mod:`vehicles._streams`), times from sim time; GPS_RAW_INT
+  and GLOBAL_POSITION_INT from the world's geodetic reference, HOME_POSITION
+  (where it last armed) and GPS_GLOBAL_ORIGIN (its local origin) whenever they
+  change; SET_GPS_GLOBAL_ORIGIN re-bases the local frame while disarmed;
+- the parameter protocol (:mod:`vehicles._params`): PARAM_REQUEST_LIST,
+  PARAM_REQUEST_READ and PARAM_SET, each answered by PARAM_VALUE;
 - COMMAND_LONG answered by COMMAND_ACK (:mod:`vehicles._commands`), refusals
   explained by STATUSTEXT; a retry (``confirmation`` > 0) of the command just
   carried out gets the same answer without being carried out again (a resent
@@ -50,25 +59,46 @@ from gcs.wire import (
     CommandResult,
     DecodeStats,
     FrameDecoder,
+    Geodetic,
     MavlinkEncoder,
     MavMessage,
     SetpointKind,
     Severity,
     SigningKey,
     SimMode,
+    geodetic_to_ned,
+    mavlink,
+    ned_to_geodetic,
+    split_px4_custom_mode,
 )
 from vehicles._autopilot import Autopilot
 from vehicles._battery import Battery
-from vehicles._commands import CommandOutcome, execute_command
-from vehicles._reports import CommCounters, VehicleView, build_report, time_boot_ms
+from vehicles._commands import CommandOutcome, execute_command, request_mode
+from vehicles._params import ParamTable
+from vehicles._px4_modes import Px4Modes
+from vehicles._reports import (
+    CommCounters,
+    Home,
+    Identity,
+    VehicleView,
+    build_report,
+    time_boot_ms,
+)
 from vehicles._setpoint_check import Refusal, SetpointLimits, check_setpoint
 from vehicles._state import Measurements
 from vehicles._streams import DEFAULT_RATES_HZ, StreamSchedule, TelemetryMessage
 
-__all__ = ["COMPONENT_ID", "EndpointCounters", "Inbound", "VehicleEndpoint"]
+__all__ = ["COMPONENT_ID", "DEFAULT_REFERENCE", "EndpointCounters", "Inbound",
+           "VehicleEndpoint"]
 
 COMPONENT_ID = 1
 """Component id of the simulated autopilot (``MAV_COMP_ID_AUTOPILOT1``)."""
+
+DEFAULT_REFERENCE = Geodetic(52.0, 4.37, 0.0)
+"""Geodetic position of the sensor frame's origin unless told otherwise (Delft, sea level)."""
+
+_PARAMS_PER_PAYLOAD = 10
+"""PARAM_VALUE frames per payload when every parameter is listed."""
 
 _STATUSTEXT_LEN = 50
 _OFFBOARD, _HOLD = int(SimMode.OFFBOARD), int(SimMode.HOLD)
@@ -110,6 +140,9 @@ class VehicleEndpoint:
         rates_hz: initial telemetry rates, Hz of sim time.
         limits: setpoint input limits.
         wall_clock: time source for signature timestamps, s since the epoch.
+        reference: geodetic position of the origin of the frame the position sensor
+            measures in (the world's NED origin).
+        gps_accuracy_m: position accuracy the GNSS reports in GPS_RAW_INT, m.
     """
 
     def __init__(self, autopilot: Autopilot, index: int, *, sysid: int,
@@ -117,7 +150,9 @@ class VehicleEndpoint:
                  signing_key: SigningKey | None = None, battery: Battery | None = None,
                  rates_hz: Mapping[TelemetryMessage, float] = DEFAULT_RATES_HZ,
                  limits: SetpointLimits | None = None,
-                 wall_clock: Callable[[], float] = time.time) -> None:
+                 wall_clock: Callable[[], float] = time.time,
+                 reference: Geodetic = DEFAULT_REFERENCE,
+                 gps_accuracy_m: float = 0.01) -> None:
         if not 0 <= index < autopilot.n_vehicles:
             raise IndexError(f"vehicle index {index} outside 0..{autopilot.n_vehicles - 1}")
         self._autopilot = autopilot
@@ -131,8 +166,19 @@ class VehicleEndpoint:
         self._battery = battery if battery is not None else Battery()
         self._streams = StreamSchedule(rates_hz)
         self._limits = limits if limits is not None else SetpointLimits()
+        self._identity = Identity(sysid, Geodetic(*reference).check("reference"),
+                                  gps_accuracy_m)
+        self._modes = Px4Modes(autopilot, index)
+        self._params = ParamTable(autopilot, index, sysid=sysid)
         self._reported_mode: int | None = None
         """Autopilot mode (a :class:`~gcs.wire.SimMode` value) the last HEARTBEAT showed."""
+        self._reported_custom: int | None = None
+        """PX4 custom mode the last HEARTBEAT showed."""
+        self._home: Home | None = None
+        """Where the vehicle first had a position, then where it last armed (loop thread)."""
+        self._was_armed = False
+        self._reported_origin: tuple[float, ...] | None = None
+        """Local origin (sensor frame) the last GPS_GLOBAL_ORIGIN showed."""
         self._last_update: float | None = None
         self._refusal_reported: dict[Refusal, float] = {}
         self._statustext_id = 0
@@ -155,6 +201,11 @@ class VehicleEndpoint:
             "COMMAND_LONG": self._command_long,
             "COMMAND_INT": self._command_int,
             "TIMESYNC": self._timesync,
+            "SET_MODE": self._set_mode,
+            "PARAM_REQUEST_LIST": self._param_request_list,
+            "PARAM_REQUEST_READ": self._param_request_read,
+            "PARAM_SET": self._param_set,
+            "SET_GPS_GLOBAL_ORIGIN": self._set_gps_global_origin,
         }
 
     @property
@@ -235,12 +286,79 @@ class VehicleEndpoint:
                 and last[1].result is not CommandResult.TEMPORARILY_REJECTED):
             outcome = last[1]  # a retry whose first copy was carried out: the same answer
         else:
-            outcome = execute_command(msg, self._autopilot, self._index, self._streams, t)
+            outcome = execute_command(msg, self._modes, self._streams, t)
             self._last_command = (key, outcome)
             if outcome.result is not CommandResult.ACCEPTED and outcome.reason:
                 self._status_text(Severity.WARNING, outcome.reason)
         self._ack(msg, outcome.result)
-        self._heartbeat_if_mode_changed(t)
+        if outcome.reply is not None:
+            self._emit_report(outcome.reply, t)
+        self._report_changes(t)
+
+    def _set_mode(self, msg: MavMessage, t: float) -> None:
+        """The SET_MODE message, as PX4 takes it: a DO_SET_MODE, acknowledged as one."""
+        outcome = request_mode(self._modes, msg.base_mode,
+                               *split_px4_custom_mode(msg.custom_mode))
+        if outcome.result is not CommandResult.ACCEPTED and outcome.reason:
+            self._status_text(Severity.WARNING, outcome.reason)
+        self._emit(self._encoder.mav.command_ack_encode(
+            mavlink.MAV_CMD_DO_SET_MODE, int(outcome.result), 0, 0, msg.get_srcSystem(),
+            msg.get_srcComponent()))
+        self._report_changes(t)
+
+    # -- parameters and origin ------------------------------------------------------------------
+
+    def _param_value(self, index: int) -> MavMessage:
+        p = self._params[index]
+        return self._encoder.mav.param_value_encode(
+            p.name.encode(), self._params.wire_value(index), int(p.kind), self._params.count,
+            index)
+
+    def _param_request_list(self, msg: MavMessage, t: float) -> None:
+        values = [self._param_value(k) for k in range(self._params.count)]
+        for start in range(0, len(values), _PARAMS_PER_PAYLOAD):
+            self._send_now(*values[start:start + _PARAMS_PER_PAYLOAD])
+
+    def _param_request_read(self, msg: MavMessage, t: float) -> None:
+        """By index when ``param_index`` is not -1, else by name."""
+        if msg.param_index >= 0:
+            index = msg.param_index if msg.param_index < self._params.count else None
+            what = f"index {msg.param_index}"
+        else:
+            index = self._params.index_of(msg.param_id)
+            what = repr(msg.param_id)
+        if index is None:
+            self._status_text(Severity.WARNING, f"param read: no parameter {what}")
+        else:
+            self._emit(self._param_value(index))
+
+    def _param_set(self, msg: MavMessage, t: float) -> None:
+        """Apply it; answer what the parameter holds now (the old value when refused)."""
+        result = self._params.set(msg.param_id, msg.param_value, msg.param_type)
+        if result.refusal:
+            self._status_text(Severity.WARNING, f"param set refused: {result.refusal}")
+        if result.index is not None:
+            self._emit(self._param_value(result.index))
+
+    def _set_gps_global_origin(self, msg: MavMessage, t: float) -> None:
+        """Re-base the local frame on the given origin (only while disarmed, as ArduPilot);
+        answered by GPS_GLOBAL_ORIGIN with the origin in force afterwards."""
+        origins = self._autopilot.state.origin_ned
+        before = tuple(origins[self._index])
+        try:
+            origin = Geodetic(msg.latitude / 1e7, msg.longitude / 1e7,
+                              msg.altitude / 1e3).check("SET_GPS_GLOBAL_ORIGIN")
+        except ValueError as exc:
+            self._status_text(Severity.WARNING, f"origin not changed: {exc}")
+        else:
+            outcome = self._autopilot.set_origin(
+                self._index, geodetic_to_ned(origin, self._identity.reference))
+            if not outcome.accepted:
+                self._status_text(Severity.WARNING, f"origin not changed: {outcome.text}")
+        now = tuple(origins[self._index])
+        self._report_changes(t)  # a new origin (and home) once the vehicle has a position
+        if now == before or self._reported_origin != now:  # else not answered yet
+            self._emit_report(TelemetryMessage.GPS_GLOBAL_ORIGIN, t)
 
     def _command_int(self, msg: MavMessage, t: float) -> None:
         """No command is taken in COMMAND_INT form here: say so rather than stay silent."""
@@ -295,12 +413,14 @@ class VehicleEndpoint:
         self._batch = messages
         try:
             self._report_failsafe()
-            self._heartbeat_if_mode_changed(t)
+            self._report_changes(t)
             due = self._streams.due(t)
             if due:
                 view = self._view(t, with_comm=TelemetryMessage.SYS_STATUS in due)
                 for message in due:
-                    self._emit(build_report(self._encoder.mav, message, view))
+                    report = build_report(self._encoder.mav, message, view)
+                    if report is not None:
+                        self._emit(report)
         finally:
             self._batch = None
         if messages:
@@ -315,14 +435,38 @@ class VehicleEndpoint:
         if self._reported_mode == _OFFBOARD and mode == _HOLD:
             self._status_text(Severity.WARNING, OFFBOARD_LOST_TEXT)
 
-    def _heartbeat_if_mode_changed(self, t: float) -> None:
-        mode = int(self._autopilot.state.mode[self._index])
-        if mode == self._reported_mode:
+    def _report_changes(self, t: float) -> None:
+        """Send at once what changed: the mode (HEARTBEAT), home (HOME_POSITION: set at the
+        first position sample and at each arming) and the local origin (GPS_GLOBAL_ORIGIN)."""
+        state, i = self._autopilot.state, self._index
+        mode, custom = int(state.mode[i]), self._modes.custom_mode()
+        if (mode, custom) != (self._reported_mode, self._reported_custom):
+            self._reported_mode, self._reported_custom = mode, custom
+            self._emit_report(TelemetryMessage.HEARTBEAT, t)
+        if state.pose_seq_seen[i] == 0:
             return
-        self._reported_mode = mode
-        self._emit(build_report(self._encoder.mav, TelemetryMessage.HEARTBEAT,
-                                self._view(t, with_comm=False)))
-        self._streams.sent(TelemetryMessage.HEARTBEAT, t)
+        armed = mode != SimMode.DISARMED
+        new_home = self._home is None or (armed and not self._was_armed)
+        self._was_armed = armed
+        if new_home:
+            here = state.p_est[i] + state.origin_ned[i]
+            self._home = Home(here, Geodetic(*(float(v) for v in ned_to_geodetic(
+                here, self._identity.reference))))
+        origin = tuple(state.origin_ned[i])
+        moved = origin != self._reported_origin
+        if moved:
+            self._reported_origin = origin
+            self._emit_report(TelemetryMessage.GPS_GLOBAL_ORIGIN, t)
+        if new_home or moved:  # the home's local coordinates move with the origin
+            self._emit_report(TelemetryMessage.HOME_POSITION, t)
+
+    def _emit_report(self, message: TelemetryMessage, t: float) -> None:
+        """Send ``message`` now, out of its schedule."""
+        view = self._view(t, with_comm=message is TelemetryMessage.SYS_STATUS)
+        report = build_report(self._encoder.mav, message, view)
+        if report is not None:
+            self._emit(report)
+            self._streams.sent(message, t)
 
     def _view(self, t: float, *, with_comm: bool) -> VehicleView:
         comm = None
@@ -332,7 +476,8 @@ class VehicleEndpoint:
                                 not_for_us=c.not_for_us, garbage_bytes=c.decode.garbage_bytes,
                                 setpoints_refused=c.setpoints_refused)
         return VehicleView(self._autopilot, self._index, self._measurements,
-                           self._battery.reading(), comm, t)
+                           self._battery.reading(), comm, t, self._identity,
+                           self._modes.custom_mode(), self._home)
 
     def _status_text(self, severity: Severity, text: str) -> None:
         """Send a STATUSTEXT (loop thread)."""

@@ -7,12 +7,20 @@ Modules:
                          it is read.
     ``_browser_script``  The page's script: hotkeys, virtual sticks and a freshness badge
                          that viser lacks.
+    ``_camera``          Where each viewer's camera looks: framed on the team, following
+                         it, centred on demand.
     ``_control_lock``    Who may steer the team: at most one viewer at a time.
+    ``_export``          ``gcs replay --export``: the replay as one HTML file a browser
+                         opens offline (viser's recorded scene, the panels drawn over it).
+    ``_events``          Events grouped as an operator reads them: one line per
+                         condition, not per vehicle.
     ``_frame``           What the scene shows in one frame, computed as plain arrays (NED,
                          SI).
     ``_history``         A rolling window of what the paper's experiment figure shows.
     ``_launch``          ``gcs demo`` and ``gcs run``: a GCS with its page (and gamepad),
                          until Ctrl-C.
+    ``_link_quality``    Link quality in %: the share of a vehicle's frames that arrived,
+                         lately.
     ``_panel``           One viewer's control panel: abort, take control, sticks, scale,
                          altitude, phases.
     ``_plots``           Live plots like the paper's experiment figure, drawn with viser's
@@ -39,6 +47,7 @@ Modules:
 """
 
 from gcs.common import lazy_modules
+from web._export import ExportResult, export_replay, run_export
 from web._frame import TeamView, build_frame
 from web._launch import run_demo, run_gcs
 from web._quadmesh import quad_mesh
@@ -49,14 +58,17 @@ from web._ui import UI_RATE_HZ, WebUi
 
 __all__ = [
     "UI_RATE_HZ",
+    "ExportResult",
     "SceneView",
     "TeamView",
     "Trails",
     "WebUi",
     "build_frame",
+    "export_replay",
     "palette",
     "quad_mesh",
     "run_demo",
+    "run_export",
     "run_gcs",
     "run_replay",
     "wireviewer",

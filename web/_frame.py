@@ -23,7 +23,8 @@ from web._quadmesh import yaw_wxyz
 from web._trails import Trails
 from web.palette import VehicleState
 
-__all__ = ["SceneFrame", "TeamView", "build_frame", "rope_pull_estimate", "vehicle_states"]
+__all__ = ["FOOT_MARK", "SceneFrame", "TeamView", "build_frame", "drop_line", "frame_reach",
+           "rope_pull_estimate", "vehicle_states"]
 
 _HOLD_WORDS = ("HOLD", "LOITER", "POSCTL", "BRAKE")
 _LAND_WORDS = ("LAND", "RTL")
@@ -33,6 +34,9 @@ LABEL_LIFT = 0.18
 
 ARROW_SECONDS = 1.0
 """A velocity arrow is where the vehicle will be in this time, m per (m/s)."""
+
+FOOT_MARK = 0.08
+"""Half-size of the cross that marks the ground under the payload, m."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -87,6 +91,9 @@ class SceneFrame:
     trails: np.ndarray  # (t, 2, 3) m
     trail_colors: np.ndarray  # (t, 2, 3) uint8
     centroid: np.ndarray | None  # (3,) m
+    drop: np.ndarray  # (3, 2, 3) or (0, 2, 3): the payload's drop line to the ground and a
+    # cross at its foot, m
+    payload_height: float  # the payload's height above the ground (z = 0), m (NaN: unknown)
 
 
 @functools.lru_cache(maxsize=64)
@@ -154,6 +161,28 @@ def _payload(view: TeamView, p: np.ndarray, known: np.ndarray,
     return np.array([c[0], c[1], min(c[2] + drop, 0.0)]), False, tension
 
 
+def drop_line(p: np.ndarray | None) -> np.ndarray:
+    """The vertical line from ``p`` (3,) down to the ground (NED z = 0, the team's home
+    level) and a cross at its foot, as segments (3, 2, 3); none for an unknown point."""
+    if p is None or not np.isfinite(p).all():
+        return np.zeros((0, 2, 3))
+    foot = np.array([p[0], p[1], 0.0])
+    across = np.array([[FOOT_MARK, 0.0, 0.0], [0.0, FOOT_MARK, 0.0]])
+    return np.stack((np.stack((p, foot)), np.stack((foot - across[0], foot + across[0])),
+                     np.stack((foot - across[1], foot + across[1]))))
+
+
+def frame_reach(frame: SceneFrame) -> float:
+    """How far the team and its payload reach from the team's centroid, horizontally, m
+    (0: the team is not known)."""
+    if frame.centroid is None:
+        return 0.0
+    p = frame.p_ned[frame.known]
+    if frame.payload_p is not None:
+        p = np.vstack((p, frame.payload_p))
+    return float(np.max(np.hypot(p[:, 0] - frame.centroid[0], p[:, 1] - frame.centroid[1])))
+
+
 def _pairs(colors: np.ndarray) -> np.ndarray:
     """Per-segment colours (k, 3) -> per-end colours (k, 2, 3)."""
     return np.repeat(colors[:, None, :], 2, axis=1)
@@ -212,4 +241,6 @@ def build_frame(view: TeamView, fleet: FleetState, *, scale: float, truth: SimTr
         ropes=ropes, rope_colors=rope_colors, payload_p=payload_p, payload_measured=measured,
         edges=edges, edge_colors=edge_colors, ghost_edges=ghost_edges, trails=trail_seg,
         trail_colors=_pairs(fade.astype(np.uint8)),
-        centroid=hanging.sum(axis=0) / len(hanging) if len(hanging) else None)
+        centroid=hanging.sum(axis=0) / len(hanging) if len(hanging) else None,
+        drop=drop_line(payload_p),
+        payload_height=-float(payload_p[2]) if payload_p is not None else math.nan)

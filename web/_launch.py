@@ -22,7 +22,7 @@ from types import FrameType
 
 from gcs.app import GcsApp, SimProcess, free_tcp_port
 from gcs.common import LOCAL_CONFIGS, default_config
-from gcs.config import load_team
+from gcs.config import load_team, signing_line
 from gcs.loop import Action, Gamepad, PhaseError, load_gamepad_config
 from gcs.transport import ZenohSettings
 from web._ui import WebUi
@@ -117,7 +117,7 @@ def serve(app: GcsApp, *, host: str, port: int, gamepad: Path | None, no_gamepad
 
 
 def run_demo(config: str, *, host: str, port: int, gamepad: Path | None,
-             no_gamepad: bool) -> int:
+             no_gamepad: bool, insecure: bool = False, override_analysis: bool = False) -> int:
     """Simulated team at real speed + GCS + page; blocks until stopped.
 
     The GCS runs on the wall clock, as ``gcs run`` does with real vehicles: its
@@ -127,12 +127,16 @@ def run_demo(config: str, *, host: str, port: int, gamepad: Path | None,
     """
     _stop_on_sigterm()
     team = load_team(config)
+    if insecure:
+        team = team.without_signing()
+    _say(signing_line(team.config.gcs, Path(team.source).parent))
     endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
     _say(f"starting the simulated team of {team.source} on {endpoint}…")
-    with SimProcess(team.source, endpoint=endpoint, speed="1") as sim:
+    with SimProcess(team.source, endpoint=endpoint, speed="1",
+                    signing=team.config.gcs.signing) as sim:
         _say(sim.ready_line)
         settings = ZenohSettings(mode="peer", connect=(endpoint,))
-        with GcsApp(team, zenoh_settings=settings) as app:
+        with GcsApp(team, zenoh_settings=settings, override_analysis=override_analysis) as app:
             code = serve(app, host=host, port=port, gamepad=gamepad, no_gamepad=no_gamepad,
                          alive=sim.alive)
         if code:
@@ -141,11 +145,15 @@ def run_demo(config: str, *, host: str, port: int, gamepad: Path | None,
 
 
 def run_gcs(config: str, *, host: str, port: int, record: Path | None,
-            gamepad: Path | None, no_gamepad: bool) -> int:
+            gamepad: Path | None, no_gamepad: bool, insecure: bool = False,
+            override_analysis: bool = False) -> int:
     """GCS on the wall clock for the config's links + page; blocks until stopped."""
     _stop_on_sigterm()
     team = load_team(config)
-    with GcsApp(team, record=record) as app:
+    if insecure:
+        team = team.without_signing()
+    _say(signing_line(team.config.gcs, Path(team.source).parent))
+    with GcsApp(team, record=record, override_analysis=override_analysis) as app:
         if record is not None:
             _say(f"recording to {record}")
         return serve(app, host=host, port=port, gamepad=gamepad, no_gamepad=no_gamepad)

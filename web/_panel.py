@@ -12,16 +12,16 @@ import threading
 import time
 from collections.abc import Callable
 
-import numpy as np
 import viser
 
 from gcs.loop import Action, OperatorSnapshot
 from web._actions import OperatorActions
 from web._browser_input import InputTracker, parse_input
 from web._browser_script import ABORT_LABEL, CHANNEL_LABEL, answer_abort, pads_html
+from web._camera import ViewControls
 from web._control_lock import ControlLock
 
-__all__ = ["FOLLOW_STEP", "HOTKEY_HELP", "PHASE_BUTTONS", "ControlPanel", "abort_for"]
+__all__ = ["HOTKEY_HELP", "PHASE_BUTTONS", "ControlPanel", "abort_for"]
 
 PHASE_BUTTONS: dict[str, Action] = {
     "arm": Action.ARM, "take off": Action.TAKEOFF, "lift": Action.LIFT,
@@ -33,28 +33,10 @@ _GROUPS = {"scale": (_SCALE, 2.0), "altitude": (_ALTITUDE, 3.0),
            "phase": (tuple(PHASE_BUTTONS), 5.0)}  # label: (buttons, order in the folder)
 _GUIDANCE, _HELP = 4.0, 6.0
 
-FOLLOW_STEP = 0.02
-"""The camera follows the team in steps of at least this, m (telemetry noise stays put)."""
-
 HOTKEY_HELP = (
     "<small>Keys (while you hold control): **W/S** forward/back, **A/D** left/right, "
     "**Q/E** rotate, **+/−** scale, **PgUp/PgDn** altitude. Drag the pad and the bar; "
-    "they spring back when released.</small>")
-
-
-def _shift_camera(client: viser.ClientHandle, delta: np.ndarray) -> None:
-    """Translate the viewer's camera and its look-at point by ``delta``: same angle, same zoom.
-
-    viser's position setter already carries look_at along (so adding ``delta`` to
-    both, in that order, moved look_at twice and turned the view); look_at is set
-    afterwards to where it must end up, which is a no-op for viser 1.1 and right
-    for a setter that would not carry it.
-    """
-    camera = client.camera
-    position, look_at = camera.position + delta, camera.look_at + delta
-    with client.atomic():
-        camera.position = position
-        camera.look_at = look_at
+    "they spring back when released. **C** centres the view on the team (anyone).</small>")
 
 
 def _notify(client: viser.ClientHandle, title: str, body: str) -> None:
@@ -91,7 +73,6 @@ class ControlPanel:
         self._lock = lock
         self._changed = on_control_change
         self._tracker = InputTracker()
-        self._last_centroid: np.ndarray | None = None
         self._refreshing = threading.Lock()  # viewers come and go on viser's threads
         gui = client.gui
         self._banner = gui.add_markdown("", order=0)
@@ -111,8 +92,8 @@ class ControlPanel:
         self._fly = fly
         self._groups: dict[str, viser.GuiButtonGroupHandle] = {}
         self._add_groups(enabled=False)
-        with gui.add_folder("View", order=4):
-            self.follow = gui.add_checkbox("camera follows team", True)
+        self.view = ViewControls(client, order=4)
+        """This viewer's camera: follows the team, centres on it."""
         self._abort.on_click(self._on_abort)
         self._take.on_click(self._on_take)
         self._channel.on_update(self._on_channel)
@@ -177,24 +158,6 @@ class ControlPanel:
             # viser 1.1 defines a method between the getter and setter of ``value``, so
             # mypy sees the property as read-only; the setter exists and is what runs.
             self.guidance.value = operator.guidance_on  # type: ignore[misc]
-
-    def follow_camera(self, centroid: np.ndarray | None) -> None:
-        """Move this viewer's camera with the team, keeping the viewer's own angle.
-
-        Only the team's motion since follow began is applied (in steps of at least
-        :data:`FOLLOW_STEP`), so a viewer who orbits or zooms is never fought.
-        """
-        if centroid is None or not self.follow.value:
-            self._last_centroid = None
-            return
-        if self._last_centroid is None:
-            self._last_centroid = centroid
-            return
-        delta = centroid - self._last_centroid
-        if float(np.linalg.norm(delta)) < FOLLOW_STEP:
-            return
-        self._last_centroid = centroid
-        _shift_camera(self.client, delta)
 
     def close(self) -> bool:
         """The viewer left: drop control if held (sticks centred); True if it held it."""

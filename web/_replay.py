@@ -31,6 +31,7 @@ DEFAULT_ROPE_LENGTH = 1.0
 """Rope length assumed when drawing a payload the log does not hold, m."""
 
 _WARNING = 4  # MAV_SEVERITY_WARNING: this and more severe (lower) are warnings
+_ERROR = 3  # MAV_SEVERITY_ERROR: this and more severe are errors
 _PHASE_TEXTS = frozenset(f"phase: {p.text}" for p in Phase)  # what the runtime writes
 
 
@@ -40,7 +41,8 @@ class ReplayEvent:
 
     t: float  # Unix s
     kind: str  # "phase", "warning" or "text"
-    text: str
+    text: str  # the GCS's own as it wrote them; a vehicle's prefixed "<sysid>: "
+    level: str = "info"  # "info", "warning" or "error", as the live page's events
 
 
 @dataclass(frozen=True, eq=False)
@@ -169,11 +171,15 @@ def _events(log: FlightLog) -> list[ReplayEvent]:
 
     The GCS also writes each phase change as a text; where the ticks are
     recorded, those texts are left out (the tick's moment is the one whose
-    state the page then shows).
+    state the page then shows). The GCS's own texts read as the live page
+    showed them; a vehicle's are prefixed with its system id.
     """
     events = [ReplayEvent(t, "phase", f"phase: {name}") for t, name in log.phase_changes()]
     ticks = len(log.tick_t) > 0
-    events += [ReplayEvent(t, "warning" if sev <= _WARNING else "text", f"{sysid}: {text}")
+    events += [ReplayEvent(t, "warning" if sev <= _WARNING else "text",
+                           text if sysid == log.gcs_sysid else f"{sysid}: {text}",
+                           "error" if sev <= _ERROR else "warning" if sev <= _WARNING
+                           else "info")
                for t, sysid, sev, text in log.texts
                if not (ticks and sysid == log.gcs_sysid and text in _PHASE_TEXTS)]
     return sorted(events, key=lambda e: e.t)

@@ -20,13 +20,15 @@ import viser
 
 from gcs.common import join_thread
 from gcs.flightlog import FlightLog
-from web._frame import build_frame
+from gcs.loop import Phase
+from web._camera import CENTRE_HOTKEY, CENTRE_LABEL, ViewControls
+from web._frame import SceneFrame, build_frame, frame_reach
 from web._history import History
 from web._plots import PlotsView
 from web._quadmesh import quad_mesh
 from web._replay import ReplayCursor, ReplayState, replay_view
 from web._scene import SceneView
-from web._status import vehicle_table_html
+from web._status import event_filter_html, events_html, vehicle_table_html
 from web._timeline import SPEEDS, Timeline
 from web._trails import Trails
 from web._ui import page_url
@@ -91,15 +93,6 @@ def _vehicles_html(state: ReplayState, stale_after: float) -> str:
                               health={}, heartbeat_age=f.heartbeat_age)
 
 
-def _events_html(state: ReplayState, start: float, limit: int = 10) -> str:
-    colors = {"phase": "#455a64", "warning": "#e67e22", "text": "#78909c"}
-    lines = [f'<div style="color:{colors[e.kind]}"><span style="color:#90a4ae">'
-             f'{e.t - start:7.1f} s</span> {html.escape(e.text)}</div>'
-             for e in reversed(state.events[-limit:])]
-    return (f'<div data-gcs="events" style="padding:2px 8px;font-size:0.8em">'
-            f'{"".join(lines) or "no events yet"}</div>')
-
-
 class ReplayUi:
     """Serve the replay of ``log``; ``start()`` then ``close()``.
 
@@ -137,6 +130,7 @@ class ReplayUi:
         with info.add_tab("Status", viser.Icon.LIST_DETAILS):
             self._summary = server.gui.add_html("")
             self._vehicles = server.gui.add_html("")
+            server.gui.add_html(event_filter_html())
             self._events = server.gui.add_html("")
         with info.add_tab("Plots", viser.Icon.CHART_LINE):
             # the charts need the team's edges; a plain autopilot log has none
@@ -146,7 +140,19 @@ class ReplayUi:
         self._add_timeline(server.gui)
         self._history = History(self.view)
         self._trails = Trails(self.view.n)
+        self._views: dict[int, ViewControls] = {}  # each viewer's camera, by client id
+        self._views_lock = threading.Lock()
+        self._frame: SceneFrame | None = None
+        self._reframe = False  # the replay reached the landing: frame the team again
+        self._landed = False
+        centre = server.gui.add_command(CENTRE_LABEL, hotkey=CENTRE_HOTKEY,
+                                        icon=viser.Icon.FOCUS_CENTERED,
+                                        description="this viewer: look at the team again")
+        centre.on_trigger(self._on_centre)
+        server.on_client_connect(self._on_connect)
+        server.on_client_disconnect(self._on_disconnect)
         self._shown_t: float | None = None
+        self._events_shown = -1
         self._shown_tick = -2
         self._echo = threading.local()
         self._draw_lock = threading.Lock()  # the UI thread and viewers' callbacks both draw
@@ -174,6 +180,35 @@ class ReplayUi:
         """Move the play head to log time ``t`` and draw it now."""
         self.timeline.seek(t)
         self.draw(self.timeline.t)
+
+    # -- viewers' cameras ----------------------------------------------------------------
+
+    def _on_connect(self, client: viser.ClientHandle) -> None:
+        view = ViewControls(client)
+        with self._views_lock:
+            self._views[client.client_id] = view
+
+    def _on_disconnect(self, client: viser.ClientHandle) -> None:
+        with self._views_lock:
+            self._views.pop(client.client_id, None)
+
+    def _on_centre(self, event: viser.CommandEvent) -> None:
+        with self._views_lock:
+            view = self._views.get(event.client_id) if event.client_id is not None else None
+        if view is not None:
+            view.request_centre()
+
+    def _follow(self) -> None:
+        """Every viewer's camera on the team as last drawn (the UI thread, each period)."""
+        frame = self._frame
+        if frame is None:
+            return
+        reframe, self._reframe = self._reframe, False
+        team_reach = frame_reach(frame)
+        with self._views_lock:
+            views = list(self._views.values())
+        for view in views:
+            view.update(frame.centroid, team_reach, reframe=reframe)
 
     # -- timeline controls ---------------------------------------------------------------
 
@@ -238,6 +273,7 @@ class ReplayUi:
             last = now
             if t != self._shown_t:
                 self.draw(t)
+            self._follow()
 
     def _rebuild(self, t: float) -> None:
         """Trails and plots as they were at ``t`` (after a jump)."""
@@ -261,6 +297,11 @@ class ReplayUi:
         self._trails.add(t, state.fleet.p_ned)
         frame = build_frame(self.view, state.fleet, scale=state.scale, truth=state.truth,
                             trails=self._trails)
+        self._frame = frame
+        landed = state.phase is Phase.LANDED
+        if landed and not self._landed:
+            self._reframe = True
+        self._landed = landed
         log = self.cursor.log
         with self.server.atomic():
             self._scene.draw(frame)
@@ -283,7 +324,9 @@ class ReplayUi:
                 state, start=self.timeline.start, name=self._name, missing=log.missing,
                 damage=log.index.damage())
             self._vehicles.content = _vehicles_html(state, self.view.stale_after)
-            self._events.content = _events_html(state, self.timeline.start)
+            if len(state.events) != self._events_shown:  # the log grows by events only
+                self._events_shown = len(state.events)
+                self._events.content = events_html(state.events, start=self.timeline.start)
 
 
 def run_replay(log: FlightLog, *, name: str, host: str, port: int) -> int:

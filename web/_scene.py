@@ -10,13 +10,16 @@ only the properties that changed. Call :meth:`SceneView.draw` inside
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import viser
 
 from web import palette
-from web._frame import SceneFrame, TeamView
+from web._frame import SceneFrame, TeamView, frame_reach
 
-__all__ = ["LABELS_PER_FRAME", "LABEL_STEP", "SceneView"]
+__all__ = ["COMPASS", "LABELS_PER_FRAME", "LABEL_STEP", "SceneView", "compass_at",
+           "ground_marks"]
 
 _EMPTY_SEGMENTS = np.zeros((1, 2, 3))
 
@@ -26,6 +29,46 @@ team each label still follows at several hertz, and a frame's cost stays bounded
 
 LABEL_STEP = 0.01
 """A label moves once its vehicle is this far from where the label is, m."""
+
+COMPASS = 0.6
+"""Length of the north arrow drawn on the ground beside the team, m."""
+
+COMPASS_STEP = 0.05
+"""The north arrow moves with the team in steps of at least this, m."""
+
+
+def ground_marks(scene: viser.SceneApi, extent: float) -> None:
+    """What tells distance and direction on the ground: the north and east axes through the
+    origin, labelled every metre out to ``extent`` m and "N" and "E" at their ends, and a
+    marker at the origin.
+
+    The grid alone (a line every 0.5 m) gave neither the scale nor the way north.
+    """
+    mark = palette.GROUND_MARK
+    reach = math.floor(extent)
+    axes = np.array([[[-extent, 0.0, 0.0], [extent, 0.0, 0.0]],
+                     [[0.0, -extent, 0.0], [0.0, extent, 0.0]]])
+    scene.add_line_segments("/ground/axes", axes, mark, thickness=0.008)
+    for k in (*range(-reach, 0), *range(1, reach + 1)):
+        for axis, position in (("n", (k, 0.0, 0.0)), ("e", (0.0, k, 0.0))):
+            scene.add_label(f"/ground/scale/{axis}{k}", f"{k} m", position=position,
+                            font_size_mode="scene", font_scene_height=0.1,
+                            anchor="top-left", depth_test=True)
+    for name, position in (("N", (extent + 0.15, 0.0, 0.0)), ("E", (0.0, extent + 0.15, 0.0))):
+        scene.add_label(f"/ground/axis_{name}", name, position=position,
+                        font_size_mode="scene", font_scene_height=0.25,
+                        anchor="center-center")
+    scene.add_icosphere("/ground/origin", radius=0.04, color=mark, cast_shadow=False,
+                        receive_shadow=False)
+    scene.add_label("/ground/origin/label", "origin", anchor="top-right",
+                    font_size_mode="scene", font_scene_height=0.1)
+
+
+def compass_at(centroid: np.ndarray, team_reach: float) -> np.ndarray:
+    """Where the north arrow starts: on the ground south-west of the team, clear of it
+    (the side the first view looks from), m."""
+    off = team_reach + 0.4
+    return np.array([centroid[0] - off, centroid[1] - off, 0.0])
 
 
 class _Sent:
@@ -75,6 +118,7 @@ class SceneView:
         side = 2.0 * geofence_xy + 2.0
         scene.add_grid("/ground", width=side, height=side, plane="xy", cell_size=0.5,
                        section_size=1.0, shadow_opacity=0.0)
+        ground_marks(scene, geofence_xy + 1.0)
         for name, g, thickness in (("geofence", geofence_xy, 0.02),
                                    ("geofence_margin", geofence_xy - geofence_margin, 0.006)):
             if name == "geofence_margin" and not geofence_margin > 0.0:
@@ -98,6 +142,17 @@ class SceneView:
         self._payload_label = scene.add_label("/team/payload/name", "payload",
                                               position=(0.0, 0.0, 0.1), anchor="top-center")
         self._ropes = self._segments(scene, "/team/ropes", 0.008)
+        self._drop = self._segments(scene, "/team/payload_drop", 0.004)
+        self._height = scene.add_label("/team/payload_height", "", anchor="center-left",
+                                       font_screen_scale=0.9, visible=False)
+        self._height_p = np.full(3, np.inf)
+        self._compass = scene.add_arrows(
+            "/team/compass", np.array([[[0.0, 0.0, 0.0], [COMPASS, 0.0, 0.0]]]),
+            palette.GROUND_MARK, shaft_radius=0.012, head_radius=0.04, head_length=0.12,
+            visible=False)
+        scene.add_label("/team/compass/north", "N", position=(COMPASS + 0.12, 0.0, 0.0),
+                        font_size_mode="scene", font_scene_height=0.16, anchor="center-center")
+        self._compass_p = np.full(3, np.inf)
         self._edges = self._segments(scene, "/team/edges", 0.015)
         self._ghost = self._segments(scene, "/team/ghost", 0.006)
         self._trails = self._segments(scene, "/team/trails", 0.006)
@@ -137,6 +192,29 @@ class SceneView:
         for i, label in enumerate(self._labels):
             self._sent.set(label, "visible", bool(frame.known[i]))
 
+    def _draw_drop(self, frame: SceneFrame) -> None:
+        """The payload's drop line and its height, labelled halfway down."""
+        self._set_segments(self._drop, frame.drop, np.asarray(palette.GROUND_MARK))
+        shown = len(frame.drop) > 0 and math.isfinite(frame.payload_height)
+        if shown:
+            middle = 0.5 * (frame.drop[0, 0] + frame.drop[0, 1])
+            if float(np.max(np.abs(middle - self._height_p))) >= LABEL_STEP:
+                self._height.position = middle
+                self._height_p = middle
+            self._sent.set(self._height, "text", f"{frame.payload_height:.2f} m")
+        self._sent.set(self._height, "visible", shown)
+
+    def _draw_compass(self, frame: SceneFrame) -> None:
+        """The north arrow beside the team (the origin's axes may be far out of view)."""
+        if frame.centroid is None:
+            self._sent.set(self._compass, "visible", False)
+            return
+        at = compass_at(frame.centroid, frame_reach(frame))
+        if float(np.max(np.abs(at - self._compass_p))) >= COMPASS_STEP:
+            self._compass.position = at
+            self._compass_p = at
+        self._sent.set(self._compass, "visible", True)
+
     def draw(self, frame: SceneFrame) -> None:
         """Send one frame (only what changed goes out)."""
         sent = self._sent
@@ -156,6 +234,8 @@ class SceneView:
                      else "payload (estimated)")
             sent.set(self._payload, "visible", True)
         self._set_segments(self._ropes, frame.ropes, frame.rope_colors)
+        self._draw_drop(frame)
+        self._draw_compass(frame)
         self._set_segments(self._edges, frame.edges, frame.edge_colors)
         self._set_segments(self._ghost, frame.ghost_edges, palette.GHOST)
         self._set_segments(self._trails, frame.trails, frame.trail_colors)

@@ -37,7 +37,8 @@ import viser
 
 from gcs.app import GcsApp
 from gcs.common import join_thread
-from gcs.loop import Action, RuntimeSnapshot
+from gcs.loop import Action, Phase, RuntimeSnapshot
+from gcs.wire import SystemStatus
 from web._actions import OperatorActions
 from web._browser_script import (
     ABORT_HOTKEY,
@@ -47,14 +48,24 @@ from web._browser_script import (
     beat,
     install_script,
 )
+from web._camera import CENTRE_HOTKEY, CENTRE_LABEL
 from web._control_lock import ControlLock
-from web._frame import TeamView, build_frame
+from web._events import EventLog
+from web._frame import TeamView, build_frame, frame_reach
 from web._history import History
+from web._link_quality import LinkQuality
 from web._panel import ControlPanel, abort_for
 from web._plots import PlotsView
 from web._quadmesh import quad_mesh
 from web._scene import SceneView
-from web._status import UiStats, events_html, summary_html, vehicles_html
+from web._status import (
+    UiStats,
+    event_filter_html,
+    events_html,
+    position_sources,
+    summary_html,
+    vehicles_html,
+)
 from web._trails import Trails
 from web._viser_threads import wake_on_loop
 
@@ -100,12 +111,17 @@ class WebUi:
                                        icon=viser.Icon.ALERT_OCTAGON,
                                        description="any viewer: the team stops, holds, lands")
         abort.on_trigger(self._on_abort)
+        centre = server.gui.add_command(CENTRE_LABEL, hotkey=CENTRE_HOTKEY,
+                                        icon=viser.Icon.FOCUS_CENTERED,
+                                        description="this viewer: look at the team again")
+        centre.on_trigger(self._on_centre)
         install_script(server)
         self._scene = SceneView(server.scene, self._view,
                                 quad_mesh(cfg.airframe.arm_x, cfg.airframe.arm_y),
                                 geofence_xy=cfg.safety.geofence_xy,
                                 geofence_margin=cfg.safety.geofence_margin)
-        # behind the team (south, its forward is north) and above: forward is away
+        # behind the team (south, its forward is north) and above: forward is away; each
+        # viewer's camera is then framed on the team wherever it is (web._camera)
         server.initial_camera.position = (-3.4, -1.0, -2.4)
         server.initial_camera.look_at = (0.0, 0.0, 0.0)
         labels = tuple(app.team.formation.label(k) for k in range(app.team.formation.m))
@@ -118,11 +134,16 @@ class WebUi:
             self._summary = server.gui.add_html(summary_html(None, loop=None, control="",
                                                              ui=None))
             self._vehicles = server.gui.add_html("")
-            self._events = server.gui.add_html(events_html(None))
+            server.gui.add_html(event_filter_html())
+            self._events = server.gui.add_html(events_html(()))
         with info.add_tab("Plots", viser.Icon.CHART_LINE):
             self._plots = PlotsView(server.gui, self._view, labels)
         self._history = History(self._view)
         self._trails = Trails(self._view.n)
+        self._event_log = EventLog()
+        self._quality = LinkQuality()
+        self._sources = position_sources(app.team)
+        self._landed_seen = False  # a landing the viewers' cameras were framed on already
         self._lock = ControlLock()
         self._actions = OperatorActions(runtime, app.operator, app.clock)
         self._panels: dict[int, ControlPanel] = {}
@@ -185,6 +206,13 @@ class WebUi:
         if panel is not None and panel.close():
             self._refresh_panels()
 
+    def _on_centre(self, event: viser.CommandEvent) -> None:
+        """The centring command (key C, the palette): for the viewer it came from."""
+        with self._panels_lock:
+            panel = self._panels.get(event.client_id) if event.client_id is not None else None
+        if panel is not None:
+            panel.view.request_centre()
+
     def _on_abort(self, event: viser.CommandEvent) -> None:
         """The abort command (the overlay button, the hotkey): as the viewer's panel's."""
         with self._panels_lock:
@@ -242,8 +270,11 @@ class WebUi:
         self._frame_costs.append(time.perf_counter() - started)
         panels = self._panel_list()
         self._write_sticks(panels)
+        landed = snap is not None and snap.phase is Phase.LANDED
+        reframe, self._landed_seen = landed and not self._landed_seen, landed
+        team_reach = frame_reach(frame)
         for panel in panels:
-            panel.follow_camera(frame.centroid)
+            panel.view.update(frame.centroid, team_reach, reframe=reframe)
         ticked = snap is not None and snap is not self._shown
         if snap is not None and snap is not self._shown:
             self._shown = snap
@@ -275,15 +306,28 @@ class WebUi:
 
     def _show_tick(self, snap: RuntimeSnapshot, panels: list[ControlPanel]) -> None:
         app = self._app
-        health = {vid: app.loop.profiles[vid].link.health for vid in self._view.ids}
+        links = [app.loop.profiles[vid].link for vid in self._view.ids]
+        health = {vid: link.health for vid, link in zip(self._view.ids, links, strict=True)}
+        voltage = np.array([_volts(link.telemetry.status) for link in links])
+        quality = self._quality.update(time.monotonic(), health)
+        new_events = self._event_log.take(app.loop.events())
         with self.server.atomic():
             self._summary.content = summary_html(snap, loop=app.loop.stats(),
                                                  control=self._control_text(), ui=self.stats())
             self._vehicles.content = vehicles_html(
                 snap, health=health, truth=snap.truth, mass=app.team.config.airframe.mass,
-                stale_after=self._view.stale_after)
-            self._events.content = events_html(snap)
+                stale_after=self._view.stale_after, voltage=voltage, quality=quality,
+                sources=self._sources)
+            if new_events:
+                self._events.content = events_html(self._event_log.events)
             if self._history.add(snap):
                 self._plots.update(self._history)
         for panel in panels:
             panel.sync(snap.operator)
+
+
+def _volts(status: SystemStatus | None) -> float:
+    """A SYS_STATUS's battery voltage, V (NaN: none, or the autopilot does not know)."""
+    if status is None or status.battery_voltage_v is None:
+        return math.nan
+    return status.battery_voltage_v

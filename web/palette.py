@@ -25,6 +25,7 @@ __all__ = [
     "EDGE_OK",
     "GEOFENCE",
     "GHOST",
+    "GROUND_MARK",
     "OK",
     "PAYLOAD",
     "PAYLOAD_ESTIMATED",
@@ -72,6 +73,8 @@ VELOCITY = np.array((41, 128, 185), dtype=np.uint8)  # velocity arrows: blue
 TRAIL = np.array((52, 73, 94), dtype=np.uint8)  # trails: dark slate
 UNKNOWN = np.array((120, 120, 120), dtype=np.uint8)  # not measured (NaN)
 GEOFENCE = (231, 76, 60)  # the geofence on the ground: red
+GROUND_MARK = (69, 90, 100)  # the ground's references (north, origin, the payload's drop
+# line and its foot): dark blue-grey, quiet beside the team
 
 EDGE_OK = (96, 125, 139)  # an edge at its desired length: neutral blue-grey
 WARN = (241, 196, 15)  # yellow

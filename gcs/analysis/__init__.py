@@ -2,20 +2,59 @@
 
 :func:`analyze` checks that the guidance can never ask more than the airframes
 give (eq. T, Th and max of the paper) and finds the largest safe deformation;
-``gcs analyze`` prints it, and a team that fails it is not flown.
+``gcs analyze`` prints it, and a team that fails it is not flown. The share of the
+payload each vehicle carries comes from the geometry (:func:`static_load`): where
+the payload hangs under the desired shape, which ropes are slack, each rope's
+tension, and the worst share with the vehicles off their places.
 
 Modules:
 
-    ``_worst_case``  Force and worst-case analysis of a team (paper, section "Force and
-                     worst case").
+    ``_safe_guidance`` The guidance config the GCS flies: the scale capped at the safe
+                      deformation.
+    ``_static_load``  The payload hanging at rest from its ropes: where it hangs, which
+                      ropes pull, how hard.
+    ``_team_load``    The payload's load on each vehicle of a team: at its desired shape, at
+                      the worst shape within a deformation, and the rope lengths that make
+                      every rope taut.
+    ``_worst_case``   Force and worst-case analysis of a team (paper, section "Force and
+                      worst case").
 """
 
-from gcs.analysis._worst_case import Analysis, a_safe_span, analysis_json, analyze, format_report
+from gcs.analysis._safe_guidance import safe_guidance
+from gcs.analysis._static_load import NoHangingPointError, StaticLoad, hanging_point, static_load
+from gcs.analysis._team_load import (
+    WorstLoad,
+    desired_load,
+    even_rope_lengths,
+    hang_depth,
+    worst_load,
+)
+from gcs.analysis._worst_case import (
+    Analysis,
+    StaticShares,
+    a_safe_span,
+    analysis_json,
+    analyze,
+    format_report,
+    largest_payload,
+)
 
 __all__ = [
     "Analysis",
+    "NoHangingPointError",
+    "StaticLoad",
+    "StaticShares",
+    "WorstLoad",
     "a_safe_span",
     "analysis_json",
     "analyze",
+    "desired_load",
+    "even_rope_lengths",
     "format_report",
+    "hang_depth",
+    "hanging_point",
+    "largest_payload",
+    "safe_guidance",
+    "static_load",
+    "worst_load",
 ]

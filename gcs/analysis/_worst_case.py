@@ -1,15 +1,24 @@
 """Force and worst-case analysis of a team (paper, section "Force and worst case").
 
 Everything is computed from the team config with the paper's formulas,
-generalised from the square to any rigid team:
+generalised from the square to any rigid team, with the payload's share per
+vehicle taken from the geometry (:mod:`gcs.analysis._team_load`):
 
-* eq. T, rope tension at equilibrium with the payload under the centroid:
-  ``(M g / n) l / sqrt(l^2 - r^2)``, r the vehicle's horizontal distance to the
-  payload (``d2 / 2`` for the square);
-* the vertical load of a vehicle carrying a conservative share of the payload,
-  ``(m + M / share) g`` (share = n - 1: a third for four vehicles), the largest
-  tilt ``arccos(load / thrust_reference)`` and the horizontal force left at the
-  bank limit ``thrust_reference * sin(bank)``;
+* the static load at the desired shape: where the payload hangs under the team's
+  rope lengths, which ropes are slack, each rope's tension (eq. T is the largest:
+  ``(M g / n) l / sqrt(l^2 - r^2)`` when the payload hangs under the centroid of a
+  regular team) and each vehicle's share of the payload;
+* the design share: the larger of the paper's assumption (1/(n - 1), a third for
+  four vehicles; ``analysis.payload_share``) and the largest share at rest. The
+  paper's square keeps its third (a quarter at rest), a kite with two slack ropes
+  gets the half its two taut ropes carry;
+* the vertical load ``(m + M share) g``, the largest tilt
+  ``arccos(load / thrust_reference)`` and the horizontal force left at the bank
+  limit ``thrust_reference * sin(bank)``;
+* the worst share with the vehicles anywhere within ``analysis.position_error`` of
+  their places (ropes that give by ``analysis.hold_stiffness``, as the simulator's
+  position holds do): a violation when a vehicle cannot hold it at full thrust, a
+  warning with its figures when it exceeds the design share;
 * eq. Th as written, ``T_h = (M g / share) ||z2|| / (2 sqrt(l^2 - ||z2||^2 / 4))``
   where ``||z2||`` is the distance between two vehicles on opposite sides of the
   payload (twice the vehicle's distance to the centroid). It equals
@@ -28,23 +37,29 @@ generalised from the square to any rigid team:
   (:func:`gain_violation` says why not the largest term);
 * the largest deformation of the team that still leaves the configured largest
   commanded acceleration available: the rope pull grows with the distance from
-  vehicle to payload, so F_h - T_h(r) >= m a_max bounds r.
+  vehicle to payload, so F_h - T_h(r) >= m a_max bounds r;
+* the largest payload the team can carry (bisection on the mass, the shares being
+  the geometry's), named as a fix wherever the payload breaks a condition: no fix
+  is ever a negative limit or bank angle;
+* the lift: the altitude where the payload leaves the ground (at the smallest
+  scale) plus the lift height, under ``operator.altitude_max`` and the geofence.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from gcs.analysis._team_load import desired_load, even_rope_lengths, hang_depth, worst_load
 from gcs.config import Team
 from gcs.formation import motion_basis
 
-__all__ = ["GAIN_FIELDS", "Analysis", "Violation", "a_safe_span", "analysis_json", "analyze",
-           "format_report",
-           "gain_violation", "rope_pull"]
+__all__ = ["GAIN_FIELDS", "Analysis", "StaticShares", "Violation", "a_safe_span", "analysis_json",
+           "analyze", "format_report", "gain_violation", "largest_payload", "rope_pull"]
 
 #: Direction of the worst acceleration vector: 45 degrees to both axes (paper).
 _AXIS_FACTOR = math.sin(math.pi / 4)
@@ -137,7 +152,10 @@ def _n(x: float, digits: int = 3) -> str:
 
 @dataclass(frozen=True)
 class Analysis:
-    """Result of :func:`analyze`; see ``to_json`` for the stable key names (SI units)."""
+    """Result of :func:`analyze`; see ``to_json`` for the stable key names (SI units).
+
+    Per-vehicle tuples are in team order; ``worst_vehicle`` is a vehicle id.
+    """
 
     team: str
     vehicles: int
@@ -167,6 +185,10 @@ class Analysis:
     configured_accel_axis: float
     safe_span: float
     safe_deformation: float
+    load: StaticShares
+    largest_payload: float
+    lift_altitude: float
+    lift_ceiling: float
     violations: tuple[Violation, ...] = field(default=())
     warnings: tuple[str, ...] = field(default=())
 
@@ -176,54 +198,115 @@ class Analysis:
         return not self.violations
 
     def to_json(self) -> dict[str, object]:
-        """One JSON-ready object with stable keys (documented in README)."""
+        """One JSON-ready object with stable keys (documented in docs/analysis.md)."""
+        ld = self.load
 
-        def num(x: float) -> float | None:
-            return None if not math.isfinite(x) else round(float(x), 6)
+        def nums(xs: tuple[float, ...]) -> list[float | None]:
+            return [_num(x) for x in xs]
 
         return {
             "team": self.team,
             "vehicles": self.vehicles,
-            "gravity_m_s2": num(self.gravity),
+            "gravity_m_s2": _num(self.gravity),
             "payload_share": self.payload_share,
-            "equilibrium_tension_N": num(self.equilibrium_tension),
-            "equilibrium_rope_angle_rad": num(self.equilibrium_rope_angle),
-            "vertical_load_N": num(self.vertical_load),
-            "max_tilt_rad": num(self.max_tilt),
-            "bank_limit_rad": num(self.bank_limit),
-            "horizontal_force_N": num(self.horizontal_force),
+            "equilibrium_tension_N": _num(self.equilibrium_tension),
+            "equilibrium_rope_angle_rad": _num(self.equilibrium_rope_angle),
+            "vertical_load_N": _num(self.vertical_load),
+            "max_tilt_rad": _num(self.max_tilt),
+            "bank_limit_rad": _num(self.bank_limit),
+            "horizontal_force_N": _num(self.horizontal_force),
             "rope_pull": {
-                "nominal_span_m": num(self.nominal_span),
-                "nominal_N": num(self.rope_pull_nominal),
-                "design_rope_angle_rad": num(self.design_rope_angle),
-                "design_span_m": num(self.design_span),
-                "design_N": num(self.rope_pull_design),
-                "bound_N": num(self.rope_pull_bound),
-                "bound_span_m": num(self.rope_pull_bound_span),
-                "worst_edge_m": num(self.worst_edge),
-                "worst_edge_N": num(self.rope_pull_worst_edge),
+                "nominal_span_m": _num(self.nominal_span),
+                "nominal_N": _num(self.rope_pull_nominal),
+                "design_rope_angle_rad": _num(self.design_rope_angle),
+                "design_span_m": _num(self.design_span),
+                "design_N": _num(self.rope_pull_design),
+                "bound_N": _num(self.rope_pull_bound),
+                "bound_span_m": _num(self.rope_pull_bound_span),
+                "worst_edge_m": _num(self.worst_edge),
+                "worst_edge_N": _num(self.rope_pull_worst_edge),
             },
-            "max_guidance_accel_m_s2": num(self.max_accel),
-            "max_guidance_accel_axis_m_s2": num(self.max_accel_axis),
+            "max_guidance_accel_m_s2": _num(self.max_accel),
+            "max_guidance_accel_axis_m_s2": _num(self.max_accel_axis),
             "gain_condition": {
-                "terms_m_s2": {k: num(v) for k, v in self.gain_terms.items()},
-                "coefficients": {k: num(v) for k, v in self.gain_coefficients.items()},
-                "lhs_m_s2": num(self.gain_lhs),
-                "rhs_m_s2": num(self.max_accel_axis),
+                "terms_m_s2": {k: _num(v) for k, v in self.gain_terms.items()},
+                "coefficients": {k: _num(v) for k, v in self.gain_coefficients.items()},
+                "lhs_m_s2": _num(self.gain_lhs),
+                "rhs_m_s2": _num(self.max_accel_axis),
                 "ok": self.gain_lhs <= self.max_accel_axis,
             },
             "configured_limits": {
-                "accel_norm_m_s2": num(self.configured_accel_norm),
-                "accel_axis_m_s2": num(self.configured_accel_axis),
+                "accel_norm_m_s2": _num(self.configured_accel_norm),
+                "accel_axis_m_s2": _num(self.configured_accel_axis),
             },
             "safe_deformation": {
-                "span_m": num(self.safe_span),
-                "margin_m": num(self.safe_deformation),
+                "span_m": _num(self.safe_span),
+                "margin_m": _num(self.safe_deformation),
             },
+            "static_load": {
+                "rope_lengths_m": nums(ld.rope_lengths),
+                "taut": list(ld.taut),
+                "tension_N": nums(ld.tension),
+                "vertical_N": nums(ld.vertical),
+                "horizontal_N": nums(ld.horizontal),
+                "share": nums(ld.share),
+                "payload_offset_m": nums(ld.payload_offset),
+                "hang_depth_m": _num(ld.hang_depth),
+                "statically_determinate": ld.determinate,
+                "assumed_share": _num(ld.assumed_share),
+                "worst_share": _num(ld.worst_share),
+                "worst_vehicle": ld.worst_vehicle,
+                "position_error_m": _num(ld.position_error),
+                "hold_stiffness_N_m": _num(ld.hold_stiffness),
+                "worst_tension_N": _num(ld.worst_tension),
+                "worst_horizontal_N": _num(ld.worst_horizontal),
+                "worst_vertical_load_N": _num(ld.worst_vertical_load),
+                "design_share": _num(ld.design_share),
+                "even_rope_lengths_m": (None if ld.even_rope_lengths is None
+                                        else nums(ld.even_rope_lengths)),
+            },
+            "largest_payload_kg": _num(self.largest_payload),
+            "lift": {"altitude_m": _num(self.lift_altitude),
+                     "ceiling_m": _num(self.lift_ceiling)},
             "violations": [asdict(v) for v in self.violations],
             "warnings": list(self.warnings),
             "ok": self.ok,
         }
+
+
+def _num(x: float) -> float | None:
+    return None if not math.isfinite(x) else round(float(x), 6) + 0.0
+
+
+@dataclass(frozen=True)
+class StaticShares:
+    """The payload's load on each vehicle from the team's geometry (team order).
+
+    ``tension`` .. ``share`` are at the desired shape (stiff ropes); ``worst_*`` over the
+    vehicles anywhere within ``position_error`` of their places, on ropes that give by
+    ``hold_stiffness``; ``design_share`` is what the force chain (eq. T, Th, the vertical
+    load) designs for: the larger of the assumed share and the share at rest.
+    """
+
+    rope_lengths: tuple[float, ...]
+    taut: tuple[bool, ...]
+    tension: tuple[float, ...]
+    vertical: tuple[float, ...]
+    horizontal: tuple[float, ...]
+    share: tuple[float, ...]
+    payload_offset: tuple[float, float]
+    hang_depth: float
+    determinate: bool
+    assumed_share: float
+    worst_share: float
+    worst_vehicle: int
+    position_error: float
+    hold_stiffness: float
+    worst_tension: float
+    worst_horizontal: float
+    worst_vertical_load: float
+    design_share: float
+    even_rope_lengths: tuple[float, ...] | None
 
 
 def _kappa(team: Team) -> float:
@@ -249,6 +332,137 @@ def _motion_warnings(unavailable: tuple[str, ...], mu_r: float) -> list[str]:
     return out
 
 
+@dataclass(frozen=True)
+class _Chain:
+    """The paper's force chain for one payload mass and design share (SI units)."""
+
+    load: float
+    max_tilt: float
+    horizontal_force: float
+    weight_share: float
+    rope_pull_design: float
+    max_accel: float
+    max_axis: float
+    safe_span: float
+    safe_margin: float
+
+
+def _chain(team: Team, mass: float, share: float) -> _Chain:
+    """Eq. T / Th's chain: vertical load, largest tilt, horizontal force, rope pull at the
+    design angle, largest acceleration and the safe span, for ``mass`` kg carried at
+    ``share`` of its weight per vehicle."""
+    cfg = team.config
+    g, m = cfg.analysis.gravity, cfg.airframe.mass
+    load = (m + mass * share) * g
+    thrust_ref = cfg.airframe.thrust_reference
+    max_tilt = math.acos(load / thrust_ref) if load < thrust_ref else 0.0
+    f_h = thrust_ref * math.sin(cfg.limits.bank)
+    weight_share = mass * g * share
+    theta = math.radians(cfg.analysis.design_rope_angle_deg)
+    rope = min(cfg.payload.lengths(team.formation.n))
+    t_design = rope_pull(weight_share, rope, 2.0 * rope * math.sin(theta))
+    max_accel = (f_h - t_design) / m
+    safe_span = a_safe_span(f_h, m, cfg.limits.accel_norm, weight_share, rope)
+    return _Chain(load=load, max_tilt=max_tilt, horizontal_force=f_h, weight_share=weight_share,
+                  rope_pull_design=t_design, max_accel=max_accel,
+                  max_axis=max_accel * _AXIS_FACTOR, safe_span=safe_span,
+                  safe_margin=safe_span - 2.0 * float(team.formation.radii.max()))
+
+
+def _carries(team: Team, mass: float, share: float, gain_lhs: float, worst_share: float) -> bool:
+    """Whether every payload-bound condition holds for ``mass`` kg at ``share`` (and at
+    ``worst_share``, the full-speed thrust)."""
+    cfg = team.config
+    c = _chain(team, mass, share)
+    worst = (cfg.airframe.mass + mass * worst_share) * cfg.analysis.gravity
+    return (c.load < cfg.airframe.thrust_reference and worst < cfg.airframe.thrust_max
+            and cfg.limits.bank < c.max_tilt and c.max_accel > 0.0
+            and cfg.limits.accel_norm <= c.max_accel and cfg.limits.accel_axis <= c.max_axis
+            and gain_lhs <= c.max_axis and c.safe_margin > 0.0)
+
+
+def largest_payload(team: Team, share: float, gain_lhs: float, worst_share: float) -> float:
+    """The heaviest payload, kg, for which every payload-bound condition holds with each
+    vehicle carrying ``share`` of it, and ``worst_share`` within full thrust (bisection; 0
+    when even a feather fails). The shares are the geometry's: they do not depend on the
+    mass."""
+    if not _carries(team, 1e-9, share, gain_lhs, worst_share):
+        return 0.0
+    cfg = team.config
+    lo, hi = 0.0, cfg.airframe.thrust_max / cfg.analysis.gravity / share
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if _carries(team, mid, share, gain_lhs, worst_share) else (lo, mid)
+    return lo
+
+
+def _shares(team: Team, assumed: float) -> tuple[StaticShares | None, str | None]:
+    """The static load at the desired shape (None and why when the ropes cannot hang it)."""
+    cfg = team.config
+    lengths = cfg.payload.lengths(team.formation.n)
+    try:
+        at_rest = desired_load(team)
+    except ValueError as exc:
+        return None, str(exc)
+    taut = tuple(bool(t) for t in at_rest.taut)
+    offset = (float(at_rest.payload_ned[0]), float(at_rest.payload_ned[1]))
+    even = None
+    if not all(taut) or math.hypot(*offset) > 1e-3 * min(lengths):
+        even = tuple(float(x) for x in even_rope_lengths(team))
+    share = float(at_rest.share.max())
+    return StaticShares(
+        rope_lengths=tuple(lengths), taut=taut,
+        tension=tuple(float(x) for x in at_rest.tension),
+        vertical=tuple(float(x) for x in at_rest.vertical),
+        horizontal=tuple(float(x) for x in at_rest.horizontal),
+        share=tuple(float(x) for x in at_rest.share), payload_offset=offset,
+        hang_depth=float(at_rest.payload_ned[2]), determinate=sum(taut) <= 3,
+        assumed_share=assumed, worst_share=share,
+        worst_vehicle=team.formation.ids[int(np.argmax(at_rest.share))],
+        position_error=0.0, hold_stiffness=cfg.analysis.hold_stiffness,
+        worst_tension=float(at_rest.tension.max()),
+        worst_horizontal=float(at_rest.horizontal.max()),
+        worst_vertical_load=(cfg.airframe.mass + cfg.payload.mass * share) * cfg.analysis.gravity,
+        design_share=max(assumed, share), even_rope_lengths=even), None
+
+
+def _ids(team: Team, mask: tuple[bool, ...]) -> str:
+    return ", ".join(str(i) for i, on in zip(team.formation.ids, mask, strict=True) if on)
+
+
+def _load_warnings(team: Team, ld: StaticShares) -> list[str]:
+    """What the geometry says that the paper's fixed share does not."""
+    out = []
+    ids = team.formation.ids
+    if ld.even_rope_lengths is not None:
+        slack = tuple(not t for t in ld.taut)
+        carry = ", ".join(f"{i} {s:.3f}" for i, s, t in zip(ids, ld.share, ld.taut, strict=True)
+                          if t)
+        lengths = ", ".join(f"{x:.3f}" for x in ld.even_rope_lengths)
+        head = (f"at the desired shape the ropes of vehicles {_ids(team, slack)} are slack"
+                if any(slack) else "at the desired shape the payload hangs "
+                f"{math.hypot(*ld.payload_offset):.3f} m off the centroid")
+        out.append(f"{head}: shares of the payload {carry}; ropes of [{lengths}] m "
+                   f"(payload.rope_lengths, in the order of vehicles) hang it under the "
+                   f"centroid with every rope taut")
+    if ld.worst_share > ld.design_share + 1e-3:
+        need = max(1, math.floor(1.0 / ld.worst_share + 1e-9))
+        cfg = team.config
+        chain = _chain(team, cfg.payload.mass, ld.worst_share)
+        left = (f"{_n(chain.max_accel)} m/s^2 of guidance acceleration left"
+                if chain.max_accel > 0.0 else "no guidance acceleration left")
+        over = (f", above the reference thrust {_n(cfg.airframe.thrust_reference, 2)} N"
+                if ld.worst_vertical_load >= cfg.airframe.thrust_reference else "")
+        out.append(f"with the vehicles up to {ld.position_error:g} m off their places "
+                   f"(analysis.position_error) vehicle {ld.worst_vehicle} can carry "
+                   f"{ld.worst_share:.3f} of the payload ({sum(ld.taut)} taut ropes"
+                   f"{' share it statically indeterminately' if not ld.determinate else ''}), "
+                   f"where the analysis designs for {ld.design_share:.3f}: a vertical load of "
+                   f"{_n(ld.worst_vertical_load, 2)} N{over}, {left}; "
+                   f"analysis.payload_share: {need} designs for it")
+    return out
+
+
 def analyze(team: Team) -> Analysis:
     """Run the worst-case analysis of a loaded team."""
     cfg = team.config
@@ -257,61 +471,25 @@ def analyze(team: Team) -> Analysis:
     n = f.n
     m = cfg.airframe.mass
     M = cfg.payload.mass
-    l = cfg.payload.rope_length
-    share = cfg.analysis.payload_share or max(n - 1, 1)
+    lengths = cfg.payload.lengths(n)
+    l = min(lengths)
+    share_div = cfg.analysis.payload_share or max(n - 1, 1)
+    assumed = 1.0 / share_div
     violations: list[Violation] = []
     warnings: list[str] = []
 
     r_nom = float(f.radii.max())
-    if r_nom >= l:
-        violations.append(Violation("payload.rope_length", f"ropes of {l:g} m cannot reach the "
-                                    f"centroid from {_n(r_nom)} m away"))
+    ld, unreachable = _shares(team, assumed)
+    if ld is None:
+        violations.append(Violation("payload.rope_length", f"the ropes cannot hang the "
+                                    f"payload: {unreachable}"))
         tension = eq_angle = math.inf
+        design = assumed
     else:
-        tension = (M * g / n) * l / math.sqrt(l**2 - r_nom**2)
-        eq_angle = math.asin(r_nom / l)
-
-    load = (m + M / share) * g
-    thrust_ref = cfg.airframe.thrust_reference
-    if load >= thrust_ref:
-        violations.append(Violation("airframe.thrust_reference",
-                                    f"vertical load {_n(load, 2)} N is not below the reference "
-                                    f"thrust {_n(thrust_ref, 2)} N: the vehicle cannot carry "
-                                    f"its share"))
-        max_tilt = 0.0
-    else:
-        max_tilt = math.acos(load / thrust_ref)
-    thrust_max = cfg.airframe.thrust_max
-    if load >= thrust_max:
-        violations.append(Violation("airframe.thrust_max",
-                                    f"vertical load {_n(load, 2)} N is not below the full-speed "
-                                    f"thrust {thrust_max:.3g} N (4 x thrust_coefficient x "
-                                    f"rotor_speed_max^2): the vehicle cannot lift itself and "
-                                    f"its share of the payload"))
-    bank = cfg.limits.bank
-    if bank >= max_tilt:
-        tilt_deg = math.degrees(max_tilt)
-        violations.append(Violation("limits.bank_deg",
-                                    f"bank limit {_n(bank)} rad is not below the largest tilt "
-                                    f"{_n(max_tilt)} rad that still carries {_n(load, 2)} N: set "
-                                    f"it below {_floor3(tilt_deg)} degrees",
-                                    {"limits.bank_deg": tilt_deg}))
-    f_h = thrust_ref * math.sin(bank)
-
-    weight_share = M * g / share
-    theta = math.radians(cfg.analysis.design_rope_angle_deg)
-    design_span = 2.0 * l * math.sin(theta)
-    t_design = rope_pull(weight_share, l, design_span)
-    if design_span < 2 * r_nom:
-        warnings.append(f"the design rope angle {_n(theta)} rad is below the rope angle of the "
-                        f"nominal shape {_n(eq_angle)} rad")
-    max_accel = (f_h - t_design) / m
-    max_axis = max_accel * _AXIS_FACTOR
-    if max_accel <= 0:
-        violations.append(Violation("analysis.design_rope_angle_deg",
-                                    f"the rope pull {_n(t_design, 2)} N at the design angle "
-                                    f"exceeds the horizontal force {_n(f_h, 2)} N left at the "
-                                    f"bank limit"))
+        tension = max(ld.tension)
+        eq_angle = max(math.atan2(h, v) for h, v, t in
+                       zip(ld.horizontal, ld.vertical, ld.taut, strict=True) if t)
+        design = ld.design_share
 
     e_max = cfg.analysis.max_distance_error
     ev_max = cfg.analysis.max_speed_error or cfg.guidance.max_speed
@@ -328,35 +506,100 @@ def analyze(team: Team) -> Analysis:
         "mu_rotation": mu_r * worst_edge,
     }
     lhs = sum(terms.values())
-    if lhs > max_axis:
+
+    chain = _chain(team, M, design)
+    if ld is not None:
+        worst = worst_load(team, cfg.analysis.position_error,
+                           stiffness=cfg.analysis.hold_stiffness)
+        ld = dataclasses.replace(
+            ld, worst_share=worst.share, worst_vehicle=f.ids[worst.vehicle],
+            position_error=worst.error, worst_tension=worst.tension,
+            worst_horizontal=worst.horizontal,
+            worst_vertical_load=(m + M * worst.share) * g)
+        warnings += _load_warnings(team, ld)
+    worst_share = ld.worst_share if ld is not None else design
+    heaviest = largest_payload(team, design, lhs, worst_share)
+    lighter = {"payload.mass": heaviest} if 0.0 < heaviest < M else {}
+    lighter_text = f"; or carry at most {_floor3(heaviest)} kg (payload.mass)" if lighter else ""
+    only_lighter = f"; carry at most {_floor3(heaviest)} kg (payload.mass)" if lighter else ""
+
+    load, max_tilt, f_h = chain.load, chain.max_tilt, chain.horizontal_force
+    thrust_ref = cfg.airframe.thrust_reference
+    share_text = f"{design:.3f} of the payload"
+    if load >= thrust_ref:
+        violations.append(Violation("airframe.thrust_reference",
+                                    f"vertical load {_n(load, 2)} N ({share_text}) is not below "
+                                    f"the reference thrust {_n(thrust_ref, 2)} N: the vehicle "
+                                    f"cannot carry its share{only_lighter}", lighter))
+    thrust_max = cfg.airframe.thrust_max
+    worst_load_ = (m + M * worst_share) * g
+    if load < thrust_max <= worst_load_:
+        violations.append(Violation("airframe.thrust_max",
+                                    f"with the vehicles up to {cfg.analysis.position_error:g} m "
+                                    f"off their places, the vertical load {_n(worst_load_, 2)} N "
+                                    f"({worst_share:.3f} of the payload) is not below the "
+                                    f"full-speed thrust {thrust_max:.3g} N: the vehicle cannot "
+                                    f"hold its worst share{only_lighter}", lighter))
+    if load >= thrust_max:
+        violations.append(Violation("airframe.thrust_max",
+                                    f"vertical load {_n(load, 2)} N is not below the full-speed "
+                                    f"thrust {thrust_max:.3g} N (4 x thrust_coefficient x "
+                                    f"rotor_speed_max^2): the vehicle cannot lift itself and "
+                                    f"its share of the payload{only_lighter}", lighter))
+    bank = cfg.limits.bank
+    if 0.0 < max_tilt <= bank:
+        tilt_deg = math.degrees(max_tilt)
+        violations.append(Violation("limits.bank_deg",
+                                    f"bank limit {_n(bank)} rad is not below the largest tilt "
+                                    f"{_n(max_tilt)} rad that still carries {_n(load, 2)} N: set "
+                                    f"it below {_floor3(tilt_deg)} degrees{lighter_text}",
+                                    {"limits.bank_deg": tilt_deg, **lighter}))
+
+    weight_share = chain.weight_share
+    theta = math.radians(cfg.analysis.design_rope_angle_deg)
+    design_span = 2.0 * l * math.sin(theta)
+    t_design = chain.rope_pull_design
+    if theta < eq_angle:
+        warnings.append(f"the design rope angle {_n(theta)} rad is below the rope angle of the "
+                        f"nominal shape {_n(eq_angle)} rad")
+    max_accel, max_axis = chain.max_accel, chain.max_axis
+    if max_accel <= 0:
+        violations.append(Violation("analysis.design_rope_angle_deg",
+                                    f"the rope pull {_n(t_design, 2)} N at the design angle "
+                                    f"exceeds the horizontal force {_n(f_h, 2)} N left at the "
+                                    f"bank limit{only_lighter}", lighter))
+    if lhs > max_axis > 0.0:  # none left at all: the limits' violations say so
         violations.append(gain_violation(terms, {"c1_speed": ev_max,
                                                  "c2_distance": e_max * kappa,
                                                  "mu_rotation": worst_edge}, max_axis))
     if cfg.limits.accel_norm > max_accel:
-        violations.append(Violation("limits.accel_norm",
-                                    f"{cfg.limits.accel_norm:g} m/s^2 exceeds the largest "
-                                    f"guidance acceleration {_n(max_accel)} m/s^2: set it to "
-                                    f"at most {_floor3(max_accel)}",
-                                    {"limits.accel_norm": max_accel}))
+        violations.append(_limit_violation("limits.accel_norm", cfg.limits.accel_norm,
+                                           "the largest guidance acceleration", max_accel,
+                                           lighter, heaviest))
     if cfg.limits.accel_axis > max_axis:
-        violations.append(Violation("limits.accel_axis",
-                                    f"{cfg.limits.accel_axis:g} m/s^2 exceeds the per-axis "
-                                    f"limit {_n(max_axis)} m/s^2: set it to at most "
-                                    f"{_floor3(max_axis)}", {"limits.accel_axis": max_axis}))
+        violations.append(_limit_violation("limits.accel_axis", cfg.limits.accel_axis,
+                                           "the per-axis limit", max_axis, lighter,
+                                           heaviest))
 
     # Largest vehicle-payload distance that leaves the configured acceleration available.
-    safe_span = a_safe_span(f_h, m, cfg.limits.accel_norm, weight_share, l)
-    safe_margin = safe_span - 2 * r_nom
+    safe_span, safe_margin = chain.safe_span, chain.safe_margin
     if safe_margin <= 0 and not violations:
+        left = (f_h - rope_pull(weight_share, l, 2 * r_nom)) / m
+        fixes = {"limits.accel_norm": left, **lighter} if left > 0 else dict(lighter)
+        named = [f"limits.accel_norm at most {_floor3(left)}"] if left > 0 else []
+        named += [f"payload.mass at most {_floor3(heaviest)} kg"] if lighter else []
         violations.append(Violation("limits.accel_norm",
                                     "the nominal shape already pulls the ropes too hard "
-                                    "to leave the configured acceleration"))
+                                    "to leave the configured acceleration"
+                                    + (f": set {' or '.join(named)}" if named else ""), fixes))
     if e_max > safe_margin > 0:
         warnings.append(f"eq. max assumes distance errors up to {_n(e_max, 2)} m, beyond the "
                         f"safe deformation of {_n(safe_margin)} m")
 
+    lift_altitude, ceiling = _lift(team, violations)
+
     return Analysis(
-        team=cfg.name, vehicles=n, gravity=g, payload_share=share,
+        team=cfg.name, vehicles=n, gravity=g, payload_share=share_div,
         equilibrium_tension=tension, equilibrium_rope_angle=eq_angle,
         vertical_load=load, max_tilt=max_tilt, bank_limit=bank, horizontal_force=f_h,
         nominal_span=2 * r_nom, rope_pull_nominal=rope_pull(weight_share, l, 2 * r_nom),
@@ -371,8 +614,63 @@ def analyze(team: Team) -> Analysis:
         gain_lhs=lhs, configured_accel_norm=cfg.limits.accel_norm,
         configured_accel_axis=cfg.limits.accel_axis,
         safe_span=safe_span, safe_deformation=safe_margin,
+        load=ld if ld is not None else _no_shares(lengths, assumed),
+        largest_payload=heaviest, lift_altitude=lift_altitude, lift_ceiling=ceiling,
         violations=tuple(violations), warnings=tuple(warnings),
     )
+
+
+def _limit_violation(name: str, value: float, what: str, largest: float,
+                     lighter: dict[str, float], heaviest: float) -> Violation:
+    """A configured acceleration limit above what is left: the limit to set, when some is
+    left, and the lighter payload (never a negative limit)."""
+    mass = f"carry at most {_floor3(heaviest)} kg (payload.mass)"
+    if largest > 0.0:
+        return Violation(name, f"{value:g} m/s^2 exceeds {what} {_n(largest)} m/s^2: set it to "
+                               f"at most {_floor3(largest)}" + (f"; or {mass}" if lighter else ""),
+                         {name: largest, **lighter})
+    return Violation(name, f"{value:g} m/s^2 exceeds {what} {_n(largest)} m/s^2: the rope pull "
+                           f"leaves no acceleration at the bank limit"
+                           + (f"; {mass}" if lighter else ""), lighter)
+
+
+def _lift(team: Team, violations: list[Violation]) -> tuple[float, float]:
+    """The altitude the lift climbs to (where the payload leaves the ground, at the smallest
+    scale, plus the lift height) and the ceiling it must stay under; a violation when it
+    does not."""
+    cfg = team.config
+    ceiling = min(cfg.operator.altitude_max, cfg.safety.geofence_altitude)
+    try:
+        depth = hang_depth(team, scale=cfg.guidance.scale_min)
+    except ValueError:
+        return math.inf, ceiling
+    top = depth + cfg.flight.lift_height
+    if top > ceiling:
+        fixes = {"flight.lift_height": ceiling - depth} if ceiling > depth else {}
+        lower = (f"set flight.lift_height at most {_floor3(ceiling - depth)}, or "
+                 if fixes else "")
+        violations.append(Violation(
+            "flight.lift_height",
+            f"the payload leaves the ground with the vehicles at {_n(depth)} m (at "
+            f"guidance.scale_min {cfg.guidance.scale_min:g}), so lifting it "
+            f"{cfg.flight.lift_height:g} m climbs to {_n(top)} m, above the ceiling "
+            f"{_n(ceiling)} m (operator.altitude_max, safety.geofence_altitude): {lower}raise "
+            f"both to at least {_n(top)}, or shorten the ropes by {_n(top - ceiling)} m",
+            fixes))
+    return top, ceiling
+
+
+def _no_shares(lengths: tuple[float, ...], assumed: float) -> StaticShares:
+    """The static load of ropes that cannot hang the payload: nothing known."""
+    n = len(lengths)
+    nan = (math.nan,) * n
+    return StaticShares(rope_lengths=lengths, taut=(False,) * n, tension=nan, vertical=nan,
+                        horizontal=nan, share=nan, payload_offset=(math.nan, math.nan),
+                        hang_depth=math.nan, determinate=False, assumed_share=assumed,
+                        worst_share=math.nan, worst_vehicle=0, position_error=math.nan,
+                        hold_stiffness=math.nan, worst_tension=math.nan,
+                        worst_horizontal=math.nan, worst_vertical_load=math.nan,
+                        design_share=assumed, even_rope_lengths=None)
 
 
 def format_report(a: Analysis, source: str) -> str:
@@ -381,11 +679,35 @@ def format_report(a: Analysis, source: str) -> str:
     def val(x: float, unit: str, digits: int = 3) -> str:
         return "unreachable" if not math.isfinite(x) else f"{_n(x, digits)} {unit}"
 
-    share = f"M g / {a.payload_share}"
+    ld = a.load
+
+    def each(xs: tuple[float, ...], digits: int = 3) -> str:
+        return " ".join("-" if not math.isfinite(x) else f"{round(x, digits) + 0.0:.{digits}f}"
+                        for x in xs)
+
+    assumed = ld.assumed_share >= ld.design_share - 1e-12
+    share = (f"M g / {a.payload_share}" if assumed else f"{ld.design_share:.3f} M g")
+    load_rows = []
+    if len(set(ld.rope_lengths)) > 1:
+        load_rows.append(("rope lengths (team order)", f"{each(ld.rope_lengths)} m"))
+    load_rows += [
+        ("payload at rest: depth below the vehicles", val(ld.hang_depth, "m")),
+        ("  offset from the centroid (x, y)", f"{each(ld.payload_offset)} m"),
+        ("  rope tension per vehicle (team order)", f"{each(ld.tension)} N"),
+        ("  share of the payload per vehicle", each(ld.share)),
+        (f"worst share, vehicles within {ld.position_error:g} m of their places "
+         f"(vehicle {ld.worst_vehicle})", each((ld.worst_share,))),
+        ("  its vertical load", val(ld.worst_vertical_load, "N")),
+        (f"design share: the larger of assumed 1/{a.payload_share} and at rest",
+         each((ld.design_share,))),
+    ]
+    load_text = (f"(m + M/{a.payload_share}) g" if assumed
+                 else f"(m + {ld.design_share:.3f} M) g")
     rows = [
         ("equilibrium rope tension (eq. T)", val(a.equilibrium_tension, "N")),
         ("  rope angle from vertical", val(a.equilibrium_rope_angle, "rad")),
-        (f"vertical load per vehicle (m + M/{a.payload_share}) g", val(a.vertical_load, "N")),
+        *load_rows,
+        (f"vertical load per vehicle {load_text}", val(a.vertical_load, "N")),
         ("largest tilt arccos(load / thrust ref.)", val(a.max_tilt, "rad")),
         ("bank limit", val(a.bank_limit, "rad")),
         ("horizontal force at the bank limit", val(a.horizontal_force, "N")),
@@ -413,6 +735,8 @@ def format_report(a: Analysis, source: str) -> str:
          val(a.max_accel_axis, "m/s^2")),
         ("largest safe distance between opposite vehicles", val(a.safe_span, "m")),
         ("maximum safe deformation (beyond the nominal shape)", val(a.safe_deformation, "m")),
+        ("largest payload the team can carry", val(a.largest_payload, "kg")),
+        (f"lift altitude (ceiling {a.lift_ceiling:.3f} m)", val(a.lift_altitude, "m")),
     ]
     width = max(len(r[0]) for r in rows)
     lines = [f"worst-case analysis of {a.team} ({a.vehicles} vehicles) from {source}"]

@@ -15,24 +15,65 @@ Modules:
                      the gamepad.
     ``_simprocess``  Start the simulated team (``python -m sim``) as a child process and
                      wait until it is up.
+    ``_verify``      ``gcs analyze --verify``: fly the team in the simulator and hold the
+                     analysis to it.
 """
 
 from gcs.app._app import LOOP_GIL_SWITCH_S, GcsApp
-from gcs.app._fly import FlightResult, fly
-from gcs.app._scenario import Scenario, ScenarioError, Step, check_scenario, load_scenario
+from gcs.app._fly import FlightResult, HeadlessFlight, fly
+from gcs.app._scenario import (
+    Scenario,
+    ScenarioError,
+    Step,
+    Sticks,
+    check_scenario,
+    load_scenario,
+    play,
+    play_step,
+)
 from gcs.app._simprocess import SimProcess, SimStartError, free_tcp_port
+from gcs.app._verify import (
+    FIGURES,
+    Figure,
+    FlightFigures,
+    Row,
+    VerifyResult,
+    compare,
+    format_verify,
+    measure_flight,
+    parse_seeds,
+    predictions,
+    rope_loads,
+    verify,
+)
 
 __all__ = [
+    "FIGURES",
     "LOOP_GIL_SWITCH_S",
+    "Figure",
+    "FlightFigures",
     "FlightResult",
     "GcsApp",
+    "HeadlessFlight",
+    "Row",
     "Scenario",
     "ScenarioError",
     "SimProcess",
     "SimStartError",
     "Step",
+    "Sticks",
+    "VerifyResult",
     "check_scenario",
+    "compare",
     "fly",
+    "format_verify",
     "free_tcp_port",
     "load_scenario",
+    "measure_flight",
+    "parse_seeds",
+    "play",
+    "play_step",
+    "predictions",
+    "rope_loads",
+    "verify",
 ]

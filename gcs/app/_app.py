@@ -20,9 +20,9 @@ from pathlib import Path
 
 import zenoh
 
-from gcs.analysis import Analysis, analyze
+from gcs.analysis import analyze, safe_guidance
 from gcs.common import join_thread
-from gcs.config import GuidanceConfig, Team
+from gcs.config import Team, ensure_team_key, team_key_path
 from gcs.flightlog import TlogRecorder
 from gcs.link import Link, LinkManager, Presence, PresenceEvent
 from gcs.loop import (
@@ -38,12 +38,17 @@ from gcs.loop import (
 from gcs.transport import Arrivals, FrameDirection, ZenohSettings, bounded_payload, open_session
 from gcs.wire import (
     CLOCK_MAX_BYTES,
+    SEAL_OVERHEAD,
     TRUTH_MAX_BYTES,
     ClockGuard,
     ClockVerdict,
     MavlinkEncoder,
     MavMessage,
+    Sealer,
+    SealError,
+    SigningKey,
     SimTruth,
+    Unsealer,
     decode_clock,
     encode_time,
     keys,
@@ -132,14 +137,13 @@ default let them hold the loop back: tick jitter p99 10 ms, 3 ms with this
 (bench/gcs_tick.py). The sim host sets the same for its receive threads."""
 
 
-def _safe_guidance(team: Team, analysis: Analysis) -> GuidanceConfig:
-    """The guidance config with the scale capped at the analysis' safe deformation."""
-    guidance = team.config.guidance
-    radius = float(team.formation.radii.max())
-    safe = 0.5 * analysis.safe_span / radius if radius > 0 else float("inf")
-    if safe >= guidance.scale_max:
-        return guidance
-    return dataclasses.replace(guidance, scale_max=max(1.0, 0.98 * safe))
+def _seal_key(team: Team) -> SigningKey | None:
+    """The team key that authenticates the simulator's clock and truth and our acks
+    (None with signing off); the simulator started for this team uses the same."""
+    settings = team.config.gcs
+    if not settings.signing:
+        return None
+    return ensure_team_key(team_key_path(settings, Path(team.source).parent))[0]
 
 
 class GcsApp:
@@ -151,15 +155,18 @@ class GcsApp:
         sim_clock: follow the simulator's clock instead of the wall clock.
         lockstep: acknowledge each tick on the sim clock (with ``sim_clock``).
         record: .tlog file to record to, or None.
+        override_analysis: fly although ``gcs analyze`` refuses the team (a warning event
+            names every violation).
     """
 
     def __init__(self, team: Team, *, zenoh_settings: ZenohSettings | None = None,
                  sim_clock: bool = False, lockstep: bool = False,
-                 record: str | Path | None = None) -> None:
+                 record: str | Path | None = None, override_analysis: bool = False) -> None:
         cfg = team.config
         self.team = team
         self.fleet = cfg.gcs.fleet
-        settings = zenoh_settings or cfg.gcs.zenoh
+        # relative TLS paths are the team file's, wherever the GCS is started from
+        settings = (zenoh_settings or cfg.gcs.zenoh).resolved(Path(team.source).parent)
         self.session: zenoh.Session = open_session(settings)
         self._subs: list[zenoh.Subscriber] = []
         self._closed = False
@@ -172,6 +179,10 @@ class GcsApp:
         self.clock_refused = 0
         """Clock samples refused by the guard: backwards, too far ahead (:class:`ClockGuard`)."""
         self._clock_guard = ClockGuard()
+        seal_key = _seal_key(team)
+        self._open_clock = Unsealer(seal_key, keys.clock(self.fleet))
+        self._open_truth = Unsealer(seal_key, keys.sim(self.fleet, "truth"))
+        self._seal_ack = Sealer(seal_key, keys.clock_ack(self.fleet))
         self._clock_noted: float | None = None  # wall time of the last event about them
         self.clock: Clock
         self._ack: zenoh.Publisher | None = None
@@ -198,7 +209,7 @@ class GcsApp:
                                  clock=self.clock.now, on_presence=self._on_presence,
                                  on_note=self._note)
         analysis = analyze(team)
-        self.operator = OperatorCommand(cfg.operator, _safe_guidance(team, analysis),
+        self.operator = OperatorCommand(cfg.operator, safe_guidance(team, analysis),
                                         now=self.clock.now())
         self.recorder: TlogRecorder | None = None
         if record is not None:
@@ -215,6 +226,11 @@ class GcsApp:
                           recorder=self.recorder, analysis=analysis,
                           truth_source=lambda: self.truth,
                           setpoints_per_tick=1 if lockstep else None, gate=self.gate)
+        if override_analysis and not analysis.ok:
+            runtime.analysis_override = True
+            self._early_notes += [("warning", f"flying against the analysis "
+                                              f"(--override-analysis): {v.term}: {v.message}")
+                                  for v in analysis.violations]
         with self._notes_lock:  # the notes that came first are shown first
             for level, text in self._early_notes:
                 runtime.note(level, text)
@@ -244,10 +260,21 @@ class GcsApp:
         self.runtime.note(level, text)
 
     def _on_clock(self, sample: zenoh.Sample) -> None:
-        data = bounded_payload(sample, CLOCK_MAX_BYTES)
+        data = bounded_payload(sample, CLOCK_MAX_BYTES + SEAL_OVERHEAD)
         try:
             if data is None:
                 raise ValueError(f"{len(sample.payload)} bytes")
+            data = self._open_clock.open(data)
+        except SealError as exc:
+            # Anyone can publish on the clock key: without the team key's seal a sample
+            # is a stranger's, and never moves the clock.
+            self.clock_refused += 1
+            self._note_refused_clock(None, self._clock_guard.last, str(exc))
+            return
+        except ValueError:
+            self.clock_errors += 1
+            return
+        try:
             clock = decode_clock(data)
         except ValueError:
             self.clock_errors += 1
@@ -271,18 +298,20 @@ class GcsApp:
             self.links.wait_received(clock.sent, ECHO_WAIT)
             self._truth_arrivals.wait({"truth": clock.truth}, ECHO_WAIT)
         if self._ack is not None and t <= self.clock.now() and self._last_ack is not None:
-            # A repeated sample: the sim is waiting; our ack may have been lost.
-            self._ack.put(self._last_ack)
+            # A repeated sample: the sim is waiting; our ack may have been lost (sealed
+            # anew: the same sealed bytes again would be a replay).
+            self._ack.put(self._seal_ack.seal(self._last_ack))
         self.clock.advance(t)
 
-    def _note_refused_clock(self, t: float, last: float | None, why: str) -> None:
+    def _note_refused_clock(self, t: float | None, last: float | None, why: str) -> None:
         """An event for the first refused clock sample, then at most one per period."""
         now = time.monotonic()
         if self._clock_noted is not None and now - self._clock_noted < CLOCK_NOTE_PERIOD_S:
             return
         self._clock_noted = now
         following = "nothing yet" if last is None else f"t = {last:.3f} s"
-        self._note("warning", f"refused simulator clock sample t = {t:g} s ({why}; following "
+        sample = "" if t is None else f" t = {t:g} s"
+        self._note("warning", f"refused simulator clock sample{sample} ({why}; following "
                               f"{following}; {self.clock_refused} refused so far)")
 
     def _send_ack(self, t: float) -> None:
@@ -296,14 +325,14 @@ class GcsApp:
         assert self._ack is not None
         self._echo.wait(ECHO_WAIT)
         self._last_ack = encode_time(t)
-        self._ack.put(self._last_ack)
+        self._ack.put(self._seal_ack.seal(self._last_ack))
 
     def _on_truth(self, sample: zenoh.Sample) -> None:
-        data = bounded_payload(sample, TRUTH_MAX_BYTES)
+        data = bounded_payload(sample, TRUTH_MAX_BYTES + SEAL_OVERHEAD)
         try:
             if data is None:
                 raise ValueError(f"{len(sample.payload)} bytes")
-            self.truth = SimTruth.from_bytes(data)
+            self.truth = SimTruth.from_bytes(self._open_truth.open(data))
         except ValueError:
             self.truth_errors += 1  # dropped; the next sample replaces it
         self._truth_arrivals.arrived("truth")

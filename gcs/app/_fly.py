@@ -4,25 +4,33 @@ Starts the simulated team behind zenoh (or joins a running ``gcs sim``), plays
 the scenario through the same operator command and phase actions as the
 browser, and returns the flight metrics. With the sim started here the GCS and
 the sim run in lockstep, so the flight is as fast as the machine allows (or
-paced with ``speed``) and repeatable.
+paced with ``speed``) and repeatable. :class:`HeadlessFlight` is that flight, played
+by a scenario here and call by call by :class:`gcs.testing.SimTeam`.
 """
 
 from __future__ import annotations
 
+import contextlib
+import copy
 import sys
+import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from gcs.app._app import GcsApp
-from gcs.app._scenario import Scenario, ScenarioError, Step, play
-from gcs.app._simprocess import SimProcess, free_tcp_port
-from gcs.config import Team
-from gcs.flightlog import FlightMetrics
-from gcs.loop import GatedClock
-from gcs.transport import ZenohSettings
+import zenoh
 
-__all__ = ["FlightResult", "fly"]
+from gcs.app._app import GcsApp, _seal_key
+from gcs.app._scenario import Scenario, ScenarioError, Step, play, play_step
+from gcs.app._simprocess import SimProcess, free_tcp_port
+from gcs.config import Team, signing_line
+from gcs.flightlog import FlightMetrics
+from gcs.loop import GatedClock, RuntimeSnapshot
+from gcs.transport import ZenohSettings
+from gcs.wire import Sealer, SimTruth, keys
+
+__all__ = ["FlightResult", "HeadlessFlight", "fly"]
 
 
 @dataclass
@@ -38,49 +46,191 @@ class FlightResult:
                 "record": self.record}
 
 
+class HeadlessFlight:
+    """A team flying headless on the simulator's clock, played by the thread that starts it.
+
+    Starts the simulator (or joins ``connect``) and a :class:`GcsApp` following its
+    clock, in lockstep with a simulator started here (``lockstep``): the thread
+    that calls :meth:`start` is then a participant of the lockstep, so the steps
+    it plays and the faults it injects act at ticks, and a flight is the same on
+    every run. Every tick feeds the flight's metrics.
+
+    Why a class: ``gcs fly`` plays a scenario file through it and
+    :class:`gcs.testing.SimTeam` one step per call, so a scripted flight has one
+    implementation.
+
+    Args:
+        team: the loaded team.
+        speed: the simulator's pace, sim seconds per wall second, or ``"max"``.
+        record: .tlog file to record to, or None.
+        connect: zenoh endpoint of a running simulator to join instead of starting one.
+        seed: of the started simulator's sensor noise and gusts.
+        override_analysis: fly although ``gcs analyze`` refuses the team.
+        lockstep: acknowledge every tick of the simulator started here.
+        say: gets the line on how the team is signed (the key is made before the sim).
+        ready_timeout: longest wait for the simulator started here to come up, s.
+    """
+
+    def __init__(self, team: Team, *, speed: str = "max", record: Path | None = None,
+                 connect: str | None = None, seed: int = 0, override_analysis: bool = False,
+                 lockstep: bool = True, say: Callable[[str], None] | None = None,
+                 ready_timeout: float = 60.0) -> None:
+        self.team = team
+        self.record = record
+        line = signing_line(team.config.gcs, Path(team.source).parent)  # the key, before the sim
+        if say is not None:
+            say(line)
+        self.sim: SimProcess | None = None
+        if connect is None:
+            self.endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
+            self.sim = SimProcess(team.source, endpoint=self.endpoint, speed=speed,
+                                  lockstep=lockstep, signing=team.config.gcs.signing,
+                                  extra=("--seed", str(seed)), ready_timeout=ready_timeout)
+        else:
+            self.endpoint = connect
+        # a simulator elsewhere is joined as the team file says (TLS across machines); the one
+        # started here listens on loopback in the clear
+        settings = ZenohSettings(mode="peer", connect=(self.endpoint,),
+                                 tls=team.config.gcs.zenoh.tls if connect is not None else None)
+        self.metrics = FlightMetrics()
+        self._metrics_lock = threading.Lock()
+        self._counted: RuntimeSnapshot | None = None  # the latest tick in the metrics
+        self._wall0 = time.monotonic()
+        self._wall_end: float | None = None
+        self._playing = contextlib.ExitStack()
+        self._player: int | None = None  # the thread that plays
+        try:
+            self.app = GcsApp(team, zenoh_settings=settings, sim_clock=True,
+                              lockstep=lockstep and self.sim is not None, record=record,
+                              override_analysis=override_analysis)
+        except BaseException:
+            if self.sim is not None:
+                self.sim.close()
+            raise
+        self.app.add_listener(self._on_tick)
+        self.clock = GatedClock(self.app.clock, self.app.gate)
+        """The clock steps wait on: in lockstep they park at ticks."""
+        self._control: tuple[zenoh.Publisher, Sealer] | None = None
+        self._closed = False
+
+    def _on_tick(self, snap: RuntimeSnapshot, _truth: SimTruth | None) -> None:
+        with self._metrics_lock:
+            self.metrics.add(snap)
+            self._counted = snap
+
+    def start(self) -> None:
+        """Start the loop, the calling thread a participant of the lockstep from now on."""
+        self._player = threading.get_ident()
+        self._playing.enter_context(self.app.gate.participant())
+        self.app.start()
+
+    def play(self, scenario: Scenario,
+             on_step: Callable[[int, Step], None] | None = None) -> None:
+        """Play ``scenario`` (:func:`gcs.app.play`); blocks until it ends."""
+        play(scenario, self.app.loop, self.clock, on_step=on_step)
+
+    def play_step(self, step: Step, *, where: str) -> None:
+        """Play one step (:func:`gcs.app.play_step`); blocks until it is done."""
+        play_step(step, self.app.loop, self.clock, where=where)
+
+    def control(self, payload: bytes) -> None:
+        """Publish ``payload``, sealed with the team key, on the simulator's control key (a
+        fault injected on purpose: ``sim._faults``).
+
+        Sent by the playing thread in lockstep, it acts at this tick's sim time on every
+        run: it travels as the tick's ack does (same session, priority, express), so
+        it reaches the simulator before the ack that lets it run on.
+        """
+        if self._control is None:
+            topic = keys.sim(self.app.fleet, "control")
+            self._control = (self.app.session.declare_publisher(
+                topic, congestion_control=zenoh.CongestionControl.BLOCK,
+                priority=zenoh.Priority.REAL_TIME, express=True),
+                Sealer(_seal_key(self.team), topic))
+        publisher, sealer = self._control
+        publisher.put(sealer.seal(payload))
+
+    def stop_playing(self) -> None:
+        """Leave the lockstep: the loop goes on without waiting for the playing thread."""
+        if self._player == threading.get_ident():  # the participant is the thread's own
+            self._playing.close()
+
+    def figures(self, *, this_tick: bool = False) -> dict[str, object]:
+        """The flight's figures so far, as ``gcs fly --json`` gives them (without its
+        ``completed``, ``error`` and ``record``).
+
+        ``this_tick``: count the tick whose window is open too. The metrics take a tick
+        once its window closed; the playing thread, which runs inside the window, has
+        seen that tick already (its phase, its state).
+        """
+        stats = self.app.loop.stats()
+        loop = {"loop_stall_max_s": round(stats.stall_max, 3),
+                "setpoint_gap_max_s": round(stats.setpoint_gap_max, 3),
+                "recoveries": self.app.loop.recovery.attempts}
+        wall = (self._wall_end if self._wall_end is not None else time.monotonic()) - self._wall0
+        with self._metrics_lock:
+            metrics, snap = self.metrics, self.app.loop.snapshot
+            if this_tick and snap is not None and snap is not self._counted:
+                metrics = copy.deepcopy(metrics)
+                metrics.add(snap)
+            return metrics.to_json(wall_seconds=wall) | loop
+
+    def simulator_exit(self) -> str | None:
+        """`` (simulator exited: its last lines)`` if the simulator started here died."""
+        if self.sim is None or self.sim.alive():
+            return None
+        return " (simulator exited: " + " | ".join(self.sim.stderr_tail[-3:]) + ")"
+
+    def close(self) -> None:
+        """Stop the loop, the GCS and the simulator started here; idempotent."""
+        if self._closed:
+            return
+        self._closed = True
+        try:
+            self.stop_playing()
+            self.app.close()
+        finally:
+            if self.sim is not None:
+                self.sim.close()
+            self._wall_end = time.monotonic()
+
+    def __enter__(self) -> HeadlessFlight:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
 def fly(team: Team, scenario: Scenario, *, speed: str = "max", record: Path | None = None,
-        connect: str | None = None, progress: bool = True) -> FlightResult:
-    """Fly ``scenario``; blocks until it ends. ``connect``: endpoint of a running sim."""
-    sim: SimProcess | None = None
-    if connect is None:
-        endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
-        sim = SimProcess(team.source, endpoint=endpoint, speed=speed, lockstep=True)
-    else:
-        endpoint = connect
-    settings = ZenohSettings(mode="peer", connect=(endpoint,))
-    metrics = FlightMetrics()
+        connect: str | None = None, progress: bool = True,
+        override_analysis: bool = False, seed: int = 0) -> FlightResult:
+    """Fly ``scenario``; blocks until it ends. ``connect``: endpoint of a running sim;
+    ``seed``: of the started sim's sensor noise and gusts."""
+
+    def say(line: str) -> None:
+        if progress:
+            print(f"gcs fly: {line}", file=sys.stderr, flush=True)
+
     error: str | None = None
-    loop: dict[str, object] = {}
-    wall0 = time.monotonic()
-    try:
-        with GcsApp(team, zenoh_settings=settings, sim_clock=True, lockstep=sim is not None,
-                    record=record) as app:
-            app.add_listener(lambda snap, _truth: metrics.add(snap))
+    with HeadlessFlight(team, speed=speed, record=record, connect=connect, seed=seed,
+                        override_analysis=override_analysis, say=say) as flight:
 
-            def show(k: int, step: Step) -> None:
-                if progress:
-                    print(f"[t={app.clock.now():7.2f} s] step {k + 1}/{len(scenario.steps)}: "
-                          f"{step.describe()}", file=sys.stderr, flush=True)
+        def show(k: int, step: Step) -> None:
+            if progress:
+                print(f"[t={flight.app.clock.now():7.2f} s] step {k + 1}/"
+                      f"{len(scenario.steps)}: {step.describe()}", file=sys.stderr, flush=True)
 
-            # In lockstep the scenario acts at ticks only, so every run is the same flight.
-            with app.gate.participant():
-                app.start()
-                try:
-                    play(scenario, app.loop, GatedClock(app.clock, app.gate), on_step=show)
-                except ScenarioError as exc:
-                    error = str(exc)
-                except Exception as exc:  # the clock stopped, the sim died...
-                    error = f"{type(exc).__name__}: {exc}"
-            stats = app.loop.stats()
-            loop = {"loop_stall_max_s": round(stats.stall_max, 3),
-                    "setpoint_gap_max_s": round(stats.setpoint_gap_max, 3),
-                    "recoveries": app.loop.recovery.attempts}
-            if sim is not None and not sim.alive():
-                error = (error or "") + " (simulator exited: " + " | ".join(
-                    sim.stderr_tail[-3:]) + ")"
-    finally:
-        if sim is not None:
-            sim.close()
-    wall = time.monotonic() - wall0
-    return FlightResult(metrics=metrics.to_json(wall_seconds=wall) | loop, error=error,
+        # In lockstep the scenario acts at ticks only, so every run is the same flight.
+        flight.start()
+        try:
+            flight.play(scenario, on_step=show)
+        except ScenarioError as exc:
+            error = str(exc)
+        except Exception as exc:  # the clock stopped, the sim died...
+            error = f"{type(exc).__name__}: {exc}"
+        flight.stop_playing()
+        died = flight.simulator_exit()
+        if died is not None:
+            error = (error or "") + died
+    return FlightResult(metrics=flight.figures(), error=error,
                         record=str(record) if record is not None else None)

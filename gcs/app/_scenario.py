@@ -27,12 +27,13 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from gcs.analysis import analyze, safe_guidance
 from gcs.common import ConfigError, FieldError, field, from_mapping, load_yaml
 from gcs.config import Team
 from gcs.loop import Action, Clock, Phase, Runtime
 
 __all__ = ["Scenario", "ScenarioError", "Step", "Sticks", "check_scenario", "load_scenario",
-           "play"]
+           "play", "play_step"]
 
 LONGEST_S = 3600.0
 """Longest wait, stick hold or timeout of one step, s: a scenario is a test flight."""
@@ -128,15 +129,20 @@ def load_scenario(path: str | Path) -> Scenario:
     return from_mapping(Scenario, raw, str(path))
 
 
-def check_scenario(scenario: Scenario, team: Team, source: str) -> None:
-    """Refuse a scenario that asks ``team`` for what its config does not allow.
+def check_scenario(scenario: Scenario, team: Team, source: str) -> list[str]:
+    """Refuse a scenario that asks ``team`` for what its config does not allow; returns
+    warnings for what the flight will fly otherwise than asked.
 
     A scale outside ``guidance.scale_min..scale_max`` (given, or reached by
     ``scale_steps`` from 1) or an altitude outside
     ``operator.altitude_min..altitude_max`` raises ConfigError naming ``source`` and
-    the step; in flight the operator command would clip it silently.
+    the step; in flight the operator command would clip it silently. A scale within
+    the config but beyond what the analysis' safe deformation allows (the GCS caps it
+    there: :func:`gcs.analysis.safe_guidance`) is a warning naming the scale flown.
     """
     g, op = team.config.guidance, team.config.operator
+    safe_max = safe_guidance(team, analyze(team)).scale_max
+    warnings: list[str] = []
     scale = 1.0
     for k, step in enumerate(scenario.steps):
         where = f"steps[{k}]"
@@ -155,6 +161,10 @@ def check_scenario(scenario: Scenario, team: Team, source: str) -> None:
             if scale > g.scale_max + 1e-9:
                 raise ConfigError(source, at, f"{what} is above guidance.scale_max "
                                   f"{g.scale_max:g} of {team.source}")
+            if scale > safe_max + 1e-9:
+                warnings.append(f"{source}: {at}: {what} is above {safe_max:.4f}, the largest "
+                                f"scale the analysis' safe deformation allows for "
+                                f"{team.source}; the GCS flies {safe_max:.4f}")
         elif step.altitude is not None:
             if step.altitude < op.altitude_min:
                 raise ConfigError(source, f"{where}.altitude", f"{step.altitude:g} m is below "
@@ -164,42 +174,48 @@ def check_scenario(scenario: Scenario, team: Team, source: str) -> None:
                 raise ConfigError(source, f"{where}.altitude", f"{step.altitude:g} m is above "
                                   f"operator.altitude_max {op.altitude_max:g} m of "
                                   f"{team.source}")
+    return warnings
 
 
 def play(scenario: Scenario, runtime: Runtime, clock: Clock, *,
          on_step: Callable[[int, Step], None] | None = None) -> None:
     """Play every step in order; ScenarioError names the step that failed."""
-    op = runtime.operator
     for k, step in enumerate(scenario.steps):
         if on_step is not None:
             on_step(k, step)
-        where = f"step {k + 1} ({step.describe()})"
-        now = clock.now()
-        if step.action is not None:
-            action = Action(step.action)
-            if _phase(runtime) is Phase.CONNECT:
-                _wait_ready(runtime, clock, step.timeout, where)
-            try:
-                runtime.request(action)
-            except Exception as exc:
-                raise ScenarioError(f"{where}: {exc}") from None
-            if action in DONE_IN:
-                _wait_phase(runtime, clock, DONE_IN[action], step.timeout, where)
-            else:  # resume: the phase stays
-                _wait_action(runtime, clock, step.timeout, where)
-        elif step.sticks is not None:
-            _hold_sticks(runtime, clock, step.sticks, step.duration, step.timeout, where)
-        elif step.scale is not None:
-            op.set_scale(step.scale)
-        elif step.scale_steps is not None:
-            op.step_scale(step.scale_steps)
-        elif step.altitude is not None:
-            op.set_altitude(step.altitude, now=now)
-        elif step.altitude_steps is not None:
-            op.step_altitude(step.altitude_steps, now=now)
-        elif step.wait is not None:
-            clock.sleep_until(now + step.wait)
-            _check_not_aborted(runtime, where)
+        play_step(step, runtime, clock, where=f"step {k + 1} ({step.describe()})")
+
+
+def play_step(step: Step, runtime: Runtime, clock: Clock, *, where: str) -> None:
+    """Play one step (a scenario's, or one call of :class:`gcs.testing.SimTeam`); returns when
+    it is done, or raises ScenarioError starting with ``where``."""
+    op = runtime.operator
+    now = clock.now()
+    if step.action is not None:
+        action = Action(step.action)
+        if _phase(runtime) is Phase.CONNECT:
+            _wait_ready(runtime, clock, step.timeout, where)
+        try:
+            runtime.request(action)
+        except Exception as exc:
+            raise ScenarioError(f"{where}: {exc}") from None
+        if action in DONE_IN:
+            _wait_phase(runtime, clock, DONE_IN[action], step.timeout, where)
+        else:  # resume: the phase stays
+            _wait_action(runtime, clock, step.timeout, where)
+    elif step.sticks is not None:
+        _hold_sticks(runtime, clock, step.sticks, step.duration, step.timeout, where)
+    elif step.scale is not None:
+        op.set_scale(step.scale)
+    elif step.scale_steps is not None:
+        op.step_scale(step.scale_steps)
+    elif step.altitude is not None:
+        op.set_altitude(step.altitude, now=now)
+    elif step.altitude_steps is not None:
+        op.step_altitude(step.altitude_steps, now=now)
+    elif step.wait is not None:
+        clock.sleep_until(now + step.wait)
+        _check_not_aborted(runtime, where)
 
 
 def _hold_sticks(runtime: Runtime, clock: Clock, sticks: Sticks, duration: float,

@@ -50,6 +50,7 @@ class SimProcess:
         endpoint: zenoh endpoint the sim listens on, e.g. ``tcp/127.0.0.1:7447``.
         speed: sim seconds per wall second, or ``"max"``.
         lockstep: let the GCS's clock acks pace the sim (headless, deterministic).
+        signing: False starts it ``--insecure`` (no MAVLink signing).
         extra: more command-line arguments for the sim.
         ready_timeout: how long to wait for its ready line, s.
         wrap: turns the command into the one to run, e.g. on another host
@@ -57,11 +58,12 @@ class SimProcess:
     """
 
     def __init__(self, config: str | Path, *, endpoint: str, speed: str = "1",
-                 lockstep: bool = False, extra: tuple[str, ...] = (),
+                 lockstep: bool = False, signing: bool = True, extra: tuple[str, ...] = (),
                  ready_timeout: float = 60.0,
                  wrap: Callable[..., list[str]] | None = None) -> None:
         cmd = [sys.executable, "-m", "sim", "--config", str(config), "--listen", endpoint,
-               "--speed", speed, *(["--lockstep"] if lockstep else []), *extra]
+               "--speed", speed, *(["--lockstep"] if lockstep else []),
+               *([] if signing else ["--insecure"]), *extra]
         if wrap is not None:
             cmd = wrap(*cmd)
         self.endpoint = endpoint
@@ -82,10 +84,12 @@ class SimProcess:
                 self.ready_line = line.strip()
                 return
             if self._proc.poll() is not None or time.monotonic() > deadline:
+                why = ("exited" if self._proc.returncode is not None
+                       else f"was not ready after {ready_timeout:g} s")
                 self.close()
-                why = "exited" if self._proc.returncode is not None else "timed out"
                 detail = " | ".join(self._err[-5:]) or "no output"
-                raise SimStartError(f"the simulator {why} before it was ready: {detail}")
+                raise SimStartError(f"the simulator {why}: {detail}" if why[0] == "w"
+                                    else f"the simulator {why} before it was ready: {detail}")
 
     def _pump(self, stream: IO[str], to_queue: bool) -> None:
         for line in stream:

@@ -7,6 +7,8 @@ against their sources the first time one is built.
 
 Modules:
 
+    ``_gravity``       Standard gravity: the one value the simulator, the airframe checks and
+                       the analysis share.
     ``_jit_cache``     Compiled kernels whose numba disk cache stays honest across files.
     ``_lazy``          Public modules of a package that load on first use, not with the
                        package.
@@ -16,6 +18,7 @@ Modules:
     ``_typed_config``  Typed, validated configuration objects built from YAML.
 """
 
+from gcs.common._gravity import STANDARD_GRAVITY
 from gcs.common._jit_cache import kernel
 from gcs.common._lazy import lazy_modules
 from gcs.common._shipped import LOCAL_CONFIGS, default_config, shipped_config
@@ -24,6 +27,7 @@ from gcs.common._typed_config import ConfigError, FieldError, field, from_mappin
 
 __all__ = [
     "LOCAL_CONFIGS",
+    "STANDARD_GRAVITY",
     "ConfigError",
     "FieldError",
     "default_config",

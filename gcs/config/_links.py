@@ -41,8 +41,9 @@ class LinkConfig:
     profile: Literal["sim", "px4", "ardupilot"] = field(
         doc="autopilot profile: command sequences and setpoint channels", default="sim")
     signing_key: str | None = field(
-        doc="MAVLink 2 signing key file (32 raw bytes or 64 hex characters); "
-            "omit for an unsigned link", default=None)
+        doc="MAVLink 2 signing key file (32 raw bytes or 64 hex characters), or 'team' for "
+            "the team key; omitted: the team key on simulated links, none on px4 and "
+            "ardupilot links (shown unsigned in red)", default=None)
     signing_link_id: int = field(doc="link id written into outgoing signatures",
                                  default=0, ge=0, le=255)
     component_id: int = field(doc="the vehicle autopilot's MAVLink component id",
@@ -61,8 +62,9 @@ class LinkConfig:
                 f"got {self.transport!r}")
 
     def signing_key_path(self, base_dir: Path) -> Path | None:
-        """The key file resolved against the configuration's folder."""
-        if self.signing_key is None:
+        """The key file resolved against the configuration's folder (None: none, or the
+        team key, which :func:`gcs.config.link_key` resolves)."""
+        if self.signing_key is None or self.signing_key == "team":
             return None
         path = Path(self.signing_key).expanduser()
         return path if path.is_absolute() else base_dir / path
@@ -83,6 +85,12 @@ class GcsLinkConfig:
                                      default=1.0, ge=0.0)
     zenoh: ZenohSettings = field(doc="how to join the zenoh fabric",
                                  default_factory=ZenohSettings)
+    signing: bool = field(
+        doc="sign the simulated links with the team key and refuse unsigned frames; false "
+            "turns it off (the page says so in red)", default=True)
+    team_key: str | None = field(
+        doc="the team key file; default: formation-gcs/team.key in the user's config "
+            "directory, made on first use", default=None)
 
     def __post_init__(self) -> None:
         try:

@@ -24,6 +24,7 @@ flight-phase heights and timings, standard gravity, links.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -31,8 +32,10 @@ from typing import Any, Literal
 
 import numpy as np
 
-from gcs.common import ConfigError, FieldError, field, from_mapping, load_yaml
+from gcs.common import STANDARD_GRAVITY, ConfigError, FieldError, field, from_mapping, load_yaml
+from gcs.config._frame import TeamFrameConfig
 from gcs.config._links import GcsLinkConfig, LinkConfig, check_links
+from gcs.config._team_key import team_key_path
 from gcs.formation import Formation, FormationError, build_formation
 from gcs.wire import load_signing_key
 from vehicles import Airframe, check_airframe, load_airframe
@@ -52,8 +55,6 @@ __all__ = [
     "VehicleSpec",
     "load_team",
 ]
-
-STANDARD_GRAVITY = 9.80665  # m/s^2
 
 MAX_EXTENT = 1e4
 """Largest vehicle coordinate and edge distance, m: a team flown by one GCS over its
@@ -132,6 +133,10 @@ class LimitsConfig:
                               gt=0.0)
     accel_axis: float = field(doc="saturation of each horizontal acceleration axis, m/s^2",
                               gt=0.0)
+    autopilot_tilt: Literal["check", "set"] = field(
+        doc="a real autopilot's own tilt limit (ArduPilot ANGLE_MAX, PX4 MPC_TILTMAX_AIR) above "
+            "bank_deg: refuse to arm (check), or set it to bank_deg and read it back (set)",
+        default="check")
 
     @property
     def bank(self) -> float:
@@ -144,8 +149,18 @@ class PayloadConfig:
     """The suspended payload and its ropes."""
 
     mass: float = field(doc="payload mass M, kg", gt=0.0)
-    rope_length: float = field(doc="rope length l (same for every vehicle), m", gt=0.0,
-                               le=100.0)
+    rope_length: float = field(
+        doc="rope length l of every vehicle, m; with rope_lengths it may be left out (it is "
+            "then the longest of them)", gt=0.0, le=100.0)
+    rope_lengths: tuple[float, ...] | None = field(
+        doc="each vehicle's own rope length, m, in the order of vehicles (default: all "
+            "rope_length)", default=None, gt=0.0, le=100.0)
+
+    def lengths(self, n_vehicles: int) -> tuple[float, ...]:
+        """Each vehicle's rope length, m, in team order."""
+        if self.rope_lengths is not None:
+            return self.rope_lengths
+        return (self.rope_length,) * n_vehicles
 
 
 @dataclass(frozen=True)
@@ -165,6 +180,14 @@ class AnalysisConfig:
         default=None, ge=1)
     gravity: float = field(doc="gravitational acceleration, m/s^2", default=STANDARD_GRAVITY,
                            gt=0.0, le=30.0)
+    position_error: float = field(
+        doc="how far (3-D) a vehicle may be off its place with the payload hanging, m: the "
+            "worst share of the payload is taken over such errors", default=0.02, ge=0.0,
+        le=1.0)
+    hold_stiffness: float = field(
+        doc="a vehicle's position hold in series with its rope, N/m: how far a rope's pull "
+            "moves its vehicle (100 fits the simulator's vehicles)", default=100.0, gt=0.0,
+        le=1e7)
 
 
 @dataclass(frozen=True)
@@ -277,6 +300,9 @@ class TeamConfig:
     links: tuple[LinkConfig, ...] | None = field(
         doc="how to reach each vehicle (default: every vehicle simulated, over zenoh)",
         default=None)
+    team_frame: TeamFrameConfig = field(
+        doc="how every vehicle is placed in one frame (docs/autopilots.md)",
+        default_factory=TeamFrameConfig)
 
     def vehicle_links(self) -> tuple[LinkConfig, ...]:
         """The configured links, or a simulated zenoh link per vehicle."""
@@ -292,6 +318,11 @@ class Team:
     config: TeamConfig
     formation: Formation
     source: str
+
+    def without_signing(self) -> Team:
+        """This team with the team key off (``--insecure``): its simulated links unsigned."""
+        gcs = dataclasses.replace(self.config.gcs, signing=False)
+        return dataclasses.replace(self, config=dataclasses.replace(self.config, gcs=gcs))
 
 
 def _normalise(raw: Any, path: Path) -> Any:
@@ -311,6 +342,12 @@ def _normalise(raw: Any, path: Path) -> Any:
                 e = dict(zip(("tail", "head", "distance"), e, strict=False))
             out.append(e)
         raw["edges"] = out
+    payload = raw.get("payload")
+    if isinstance(payload, dict) and "rope_length" not in payload:
+        ropes = payload.get("rope_lengths")
+        if isinstance(ropes, list) and ropes and all(
+                isinstance(r, int | float) and not isinstance(r, bool) for r in ropes):
+            raw["payload"] = {**payload, "rope_length": max(ropes)}  # each checked later
     frame = raw.get("airframe")
     if isinstance(frame, str):
         frame_path = (path.parent / frame).resolve()
@@ -367,27 +404,48 @@ def load_team(path: str | Path) -> Team:
         raise ConfigError(str(path), "guidance.scale_step",
                           f"{g.scale_step:g} is wider than the whole scale range "
                           f"guidance.scale_min..scale_max [{g.scale_min:g}, {g.scale_max:g}]")
+    _check_ropes(cfg, len(ids), str(path))
     _check_heights(cfg, formation, str(path))
     _check_room(cfg, formation, str(path))
     _check_signing_keys(cfg, path)
     return Team(config=cfg, formation=formation, source=str(path))
 
 
+def _check_ropes(cfg: TeamConfig, n_vehicles: int, source: str) -> None:
+    """One rope length per vehicle, and ``rope_length`` the longest when both are given."""
+    ropes = cfg.payload.rope_lengths
+    if ropes is None:
+        return
+    if len(ropes) != n_vehicles:
+        raise ConfigError(source, "payload.rope_lengths",
+                          f"{len(ropes)} lengths for {n_vehicles} vehicles: give one per "
+                          f"vehicle, in the order of vehicles")
+    if cfg.payload.rope_length != max(ropes):
+        raise ConfigError(source, "payload.rope_length",
+                          f"{cfg.payload.rope_length:g} m is not the longest of "
+                          f"payload.rope_lengths ({max(ropes):g} m): leave it out")
+
+
 def _taut_altitude(cfg: TeamConfig, formation: Formation, scale: float) -> float:
-    """Vehicle altitude at which the ropes become taut, payload on the ground (as the loop's
-    ``Runtime.taut_altitude``), m."""
-    r = scale * float(formation.radii.max())
-    return math.sqrt(max(cfg.payload.rope_length**2 - r**2, 0.0))
+    """Vehicle altitude at which the first rope becomes taut, payload on the ground at the
+    centroid (with ropes of one length, the loop's ``Runtime.taut_altitude``), m."""
+    ropes = np.asarray(cfg.payload.lengths(formation.n))
+    r = scale * formation.radii
+    return float(np.sqrt(np.maximum(ropes**2 - r**2, 0.0)).min())
 
 
 def _check_heights(cfg: TeamConfig, formation: Formation, source: str) -> None:
     """Refuse altitude limits that contradict each other or the flight phases' heights."""
     op, fl, safety = cfg.operator, cfg.flight, cfg.safety
-    radius = float(formation.radii.max())
-    if cfg.payload.rope_length <= radius:
-        raise ConfigError(source, "payload.rope_length",
-                          f"ropes of {cfg.payload.rope_length:g} m cannot reach the payload "
-                          f"under the centroid from {radius:.4g} m away")
+    ropes = cfg.payload.lengths(formation.n)
+    for k, (rope, radius) in enumerate(zip(ropes, formation.radii, strict=True)):
+        if rope <= radius:
+            at = "payload.rope_length" if cfg.payload.rope_lengths is None else \
+                f"payload.rope_lengths[{k}]"
+            raise ConfigError(source, at,
+                              f"{'ropes' if cfg.payload.rope_lengths is None else 'a rope'} of "
+                              f"{rope:g} m cannot reach the payload under the centroid from "
+                              f"{float(radius):.4g} m away")
     if op.altitude_max > safety.geofence_altitude:
         raise ConfigError(source, "operator.altitude_max",
                           f"{op.altitude_max:g} m is above safety.geofence_altitude "
@@ -407,7 +465,34 @@ def _check_heights(cfg: TeamConfig, formation: Formation, source: str) -> None:
         raise ConfigError(source, "flight.lift_height",
                           f"lifting {fl.lift_height:g} m above the taut-rope altitude "
                           f"{top:.3g} m (at guidance.scale_min {cfg.guidance.scale_min:g}) "
-                          f"climbs above operator.altitude_max ({op.altitude_max:g} m)")
+                          f"climbs above operator.altitude_max ({op.altitude_max:g} m): "
+                          f"{_lift_fixes(cfg, top)}")
+
+
+def _lift_fixes(cfg: TeamConfig, top: float) -> str:
+    """What brings the lift under the ceiling, each alone: a lower lift, a higher ceiling
+    (with the geofence's), a larger smallest scale (the taut altitude at it) or shorter
+    ropes."""
+    lift, ceiling = cfg.flight.lift_height, cfg.operator.altitude_max
+    fixes = []
+    if ceiling - top > 0.0:
+        fixes.append(f"flight.lift_height at most {_down(ceiling - top)}")
+    need = top + lift
+    raise_ = f"operator.altitude_max at least {_up(need)}"
+    if need > cfg.safety.geofence_altitude:
+        raise_ += f" with safety.geofence_altitude at least {_up(need)}"
+    fixes.append(raise_)
+    shorter = lift + top - ceiling
+    fixes.append(f"ropes {_up(shorter)} m shorter")
+    return "set " + ", or ".join(fixes)
+
+
+def _down(x: float) -> str:
+    return f"{math.floor(x * 1000.0) / 1000.0:.3f}"
+
+
+def _up(x: float) -> str:
+    return f"{math.ceil(x * 1000.0) / 1000.0:.3f}"
 
 
 def _check_room(cfg: TeamConfig, formation: Formation, source: str) -> None:
@@ -448,4 +533,10 @@ def _check_signing_keys(cfg: TeamConfig, path: Path) -> None:
         except ConfigError as exc:
             raise ConfigError(str(path), f"links[{k}].signing_key",
                               f"{link.signing_key}: {exc.what}") from None
+    team_key = team_key_path(cfg.gcs, path.parent)
+    if cfg.gcs.team_key is not None or team_key.exists():
+        try:
+            load_signing_key(team_key)
+        except ConfigError as exc:
+            raise ConfigError(str(path), "gcs.team_key", f"{team_key}: {exc.what}") from None
 

@@ -21,10 +21,14 @@ Modules:
                             for a whole fleet.
     ``_health``             Link health of one vehicle: is it alive, what is lost, what is
                             refused, how slow.
+    ``_key_install``        Installing the team key on a real autopilot (SETUP_SIGNING), and
+                            proving that it took.
     ``_link``               The GCS's link to one vehicle: MAVLink in and out, latest
                             telemetry, health, commands.
     ``_manager``            All of the GCS's links, opened from configuration and closed
                             together.
+    ``_params``             One autopilot parameter read or set over MAVLink's parameter
+                            protocol, confirmed.
     ``_profile``            Autopilot profiles: how each kind of vehicle is armed, launched,
                             switched and landed.
     ``_profile_ardupilot``  Profile of ArduCopter in GUIDED mode, with the GCS-side vertical
@@ -39,8 +43,10 @@ from gcs.link._discovery import Presence, PresenceEvent
 from gcs.link._errors import CommandAck, CommandError, LinkError
 from gcs.link._fanout import Fanout
 from gcs.link._health import LinkHealth
+from gcs.link._key_install import install_signing_key
 from gcs.link._link import Link
 from gcs.link._manager import LinkManager
+from gcs.link._params import ParamClient, ParamValue
 from gcs.link._profile import AutopilotProfile
 from gcs.link._profiles import make_profile
 
@@ -53,7 +59,10 @@ __all__ = [
     "LinkError",
     "LinkHealth",
     "LinkManager",
+    "ParamClient",
+    "ParamValue",
     "Presence",
     "PresenceEvent",
+    "install_signing_key",
     "make_profile",
 ]

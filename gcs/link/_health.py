@@ -43,12 +43,16 @@ class LinkHealth:
     """Latest round-trip time (COMMAND_ACK or TIMESYNC), s."""
     refused_values: int = 0
     """Telemetry messages from the vehicle refused for their values (NaN, inf, huge)."""
+    refused_oversize: int = 0
+    """Payloads for this link dropped unread for being too long (zenoh links)."""
+    signed: bool = False
+    """The link signs what it sends and refuses unsigned frames (MAVLink 2 signing)."""
 
     @property
     def refused(self) -> int:
         """All refused frames and messages (the page's "refused" column)."""
         return (self.refused_bad_crc + self.refused_signature + self.refused_wrong_system
-                + self.refused_values)
+                + self.refused_values + self.refused_oversize)
 
     @property
     def loss_ratio(self) -> float:

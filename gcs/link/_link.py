@@ -100,6 +100,7 @@ class Link:
         self._encoder = MavlinkEncoder(system_id=gcs_system_id, component_id=gcs_component_id,
                                        signing_key=signing_key, link_id=signing_link_id)
         self._decoder = FrameDecoder(datagram=transport.datagram, signing_key=signing_key)
+        self._signed = signing_key is not None
         self._clock = clock
         self._command_timeout_s = command_timeout_s
         self._command_retries = command_retries
@@ -233,7 +234,8 @@ class Link:
                 refused_wrong_system=self._wrong_system,
                 foreign_systems=tuple(sorted(self._foreign)),
                 garbage_bytes=stats.garbage_bytes, truncated=stats.truncated, rtt_s=self._rtt_s,
-                refused_values=self._store.refused)
+                refused_values=self._store.refused, signed=self._signed,
+                refused_oversize=int(getattr(self._transport, "oversize", 0)))
 
     def decode_stats(self) -> DecodeStats:
         """The decoder's raw counters."""

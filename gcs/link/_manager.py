@@ -23,7 +23,7 @@ from types import MappingProxyType
 import zenoh
 
 from gcs.common import join_thread
-from gcs.config import ZENOH, GcsLinkConfig, LinkConfig, check_links
+from gcs.config import ZENOH, GcsLinkConfig, LinkConfig, check_links, link_key
 from gcs.link._discovery import Discovery, PresenceEvent, PresenceSource
 from gcs.link._errors import CommandResult, LinkError
 from gcs.link._link import Link
@@ -37,7 +37,7 @@ from gcs.transport import (
     open_session,
     watch_alive,
 )
-from gcs.wire import SigningKey, load_signing_key
+from gcs.wire import SigningKey
 from gcs.wire.keys import Direction
 
 __all__ = ["LinkManager"]
@@ -156,8 +156,7 @@ class LinkManager:
         self.close()
 
     def _load_key(self, config: LinkConfig) -> SigningKey | None:
-        path = config.signing_key_path(self._base_dir)
-        return load_signing_key(path) if path is not None else None
+        return link_key(config, settings=self._settings, base_dir=self._base_dir)
 
     def _open(self, config: LinkConfig, key: SigningKey | None, *,
               service_offset_s: float) -> Link:

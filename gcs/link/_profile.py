@@ -16,10 +16,39 @@ from types import MappingProxyType
 from typing import Protocol
 
 from gcs.link._errors import CommandResult, LinkError
-from gcs.link._link import Link
-from gcs.wire import CUSTOM_MODE_ENABLED, Heartbeat, LocalPosition, SetpointKind, Telemetry, mavlink
+from gcs.link._link import DEFAULT_TELEMETRY_RATES_HZ, Link
+from gcs.link._params import ParamClient
+from gcs.wire import (
+    CUSTOM_MODE_ENABLED,
+    Heartbeat,
+    LocalPosition,
+    SetpointKind,
+    Telemetry,
+    mavlink,
+    message_id,
+)
 
-__all__ = ["AutopilotProfile", "ProfileBase", "ProfileName"]
+__all__ = [
+    "REAL_AUTOPILOT_RATES_HZ",
+    "TEAM_FRAME_RATES_HZ",
+    "AutopilotProfile",
+    "ProfileBase",
+    "ProfileName",
+]
+
+TEAM_FRAME_RATES_HZ: Mapping[str, float] = MappingProxyType({
+    "GLOBAL_POSITION_INT": 5.0,
+    "GPS_GLOBAL_ORIGIN": 0.5,
+    "HOME_POSITION": 0.5,
+})
+"""What ties a real autopilot's local frame to the team frame, Hz (``gcs.loop`` places every
+vehicle through it): its local origin, its global position (with LOCAL_POSITION_NED, the
+origin again when the autopilot does not report it) and its home; asked for so the
+``.tlog`` holds them too."""
+
+REAL_AUTOPILOT_RATES_HZ: Mapping[str, float] = MappingProxyType(
+    {**DEFAULT_TELEMETRY_RATES_HZ, **TEAM_FRAME_RATES_HZ})
+"""What the PX4 and ArduPilot profiles ask for when first heard."""
 
 PREPARE_TIMEOUT_S = 0.5
 """Wait for each telemetry request's ack, s, one attempt: a vehicle that does not answer must
@@ -123,6 +152,23 @@ class AutopilotProfile(Protocol):
         """
         ...
 
+    @property
+    def tilt_limit_param(self) -> str | None:
+        """The autopilot's parameter that bounds its tilt (None: the GCS cannot read one)."""
+        ...
+
+    def tilt_limit_deg(self) -> float:
+        """The autopilot's tilt limit, degrees (read from :attr:`tilt_limit_param`)."""
+        ...
+
+    def set_tilt_limit_deg(self, degrees: float) -> float:
+        """Set the tilt limit; the value read back afterwards, degrees."""
+        ...
+
+    def request_message(self, message: str) -> None:
+        """Ask for one ``message`` now (MAV_CMD_REQUEST_MESSAGE); CommandError if refused."""
+        ...
+
 
 class ProfileBase:
     """Steps shared by all profiles: arming, confirmed mode changes, autopilot check."""
@@ -136,10 +182,21 @@ class ProfileBase:
     telemetry_rates_hz: Mapping[str, float] = MappingProxyType({})
     """What :meth:`prepare` asks for (SET_MESSAGE_INTERVAL); empty: the vehicle's own rates."""
 
+    tilt_limit_param: str | None = None
+    """See :attr:`AutopilotProfile.tilt_limit_param`."""
+
+    tilt_units_per_deg: float = 1.0
+    """Units of :attr:`tilt_limit_param` per degree (ArduPilot's centidegrees: 100)."""
+
+    params_bytewise: bool = False
+    """Whether integer parameters travel byte for byte in the float field (PX4)."""
+
     def __init__(self, link: Link, *, confirm_timeout_s: float = 3.0) -> None:
         self._link = link
         self._confirm_timeout_s = confirm_timeout_s
         self._mode_names: dict[int, str] = {}
+        self.params = ParamClient(link, bytewise=self.params_bytewise)
+        """The vehicle's parameters (read, set and read back)."""
 
     @property
     def link(self) -> Link:
@@ -161,6 +218,26 @@ class ProfileBase:
             return {}
         return self._link.request_telemetry(self.telemetry_rates_hz,
                                             timeout_s=PREPARE_TIMEOUT_S, retries=0)
+
+    def _tilt_param(self) -> str:
+        if self.tilt_limit_param is None:
+            raise LinkError(self._link.sysid, "its autopilot has no tilt limit the GCS can read")
+        return self.tilt_limit_param
+
+    def tilt_limit_deg(self) -> float:
+        """The autopilot's tilt limit, degrees; LinkError when it does not answer."""
+        return self.params.read(self._tilt_param()).value / self.tilt_units_per_deg
+
+    def set_tilt_limit_deg(self, degrees: float) -> float:
+        """Set the tilt limit (PARAM_SET), read it back; the value read back, degrees."""
+        name = self._tilt_param()
+        return self.params.set(name, degrees * self.tilt_units_per_deg).value \
+            / self.tilt_units_per_deg
+
+    def request_message(self, message: str) -> None:
+        """MAV_CMD_REQUEST_MESSAGE for ``message`` (a name), one quick attempt."""
+        self._link.command_long(mavlink.MAV_CMD_REQUEST_MESSAGE, (float(message_id(message)),),
+                                timeout_s=PREPARE_TIMEOUT_S, retries=0)
 
     def mode_text(self, heartbeat: Heartbeat | None = None) -> str:
         """Flight mode of ``heartbeat`` (default: the latest), readable; ``"unknown"`` if none.

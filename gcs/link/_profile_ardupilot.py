@@ -13,8 +13,12 @@ the profile asks for LOCAL_POSITION_NED and ATTITUDE at 20 Hz
 (:meth:`~gcs.link._profile.ProfileBase.prepare`), far above ArduPilot's
 default stream rates on most ports.
 
-Take-off: MAV_CMD_DO_SET_MODE GUIDED (4), arm, MAV_CMD_NAV_TAKEOFF (param7 =
-altitude above home, m). Land: MAV_CMD_DO_SET_MODE LAND (9).
+Arm: MAV_CMD_DO_SET_MODE GUIDED (4) first, then arm: ArduCopter armed in
+another mode (STABILIZE) and switched to GUIDED later flew its first seconds on
+its pilot's sticks. Take-off: GUIDED and armed (either done only if needed),
+then MAV_CMD_NAV_TAKEOFF (param7 = altitude above home, m) at once: an armed
+copter left on the ground disarms itself (``DISARM_DELAY``). Land:
+MAV_CMD_DO_SET_MODE LAND (9). Tilt limit: ``ANGLE_MAX``, centidegrees.
 """
 
 from __future__ import annotations
@@ -25,8 +29,8 @@ from dataclasses import dataclass
 
 from gcs.common import field
 from gcs.link._errors import LinkError
-from gcs.link._link import DEFAULT_TELEMETRY_RATES_HZ, Link
-from gcs.link._profile import ProfileBase, ProfileName
+from gcs.link._link import Link
+from gcs.link._profile import REAL_AUTOPILOT_RATES_HZ, ProfileBase, ProfileName
 from gcs.transport import FrameDirection
 from gcs.wire import (
     SETPOINT_MESSAGE,
@@ -75,7 +79,9 @@ class ArduPilotProfile(ProfileBase):
     streaming_mode = CopterMode.GUIDED.name
     landing_modes = frozenset(m.name for m in (CopterMode.LAND, CopterMode.RTL,
                                                CopterMode.SMART_RTL))
-    telemetry_rates_hz = DEFAULT_TELEMETRY_RATES_HZ
+    telemetry_rates_hz = REAL_AUTOPILOT_RATES_HZ
+    tilt_limit_param = "ANGLE_MAX"
+    tilt_units_per_deg = 100.0  # centidegrees
 
     def __init__(self, link: Link, *, confirm_timeout_s: float = 3.0,
                  vertical: VerticalPd | None = None, max_position_age_s: float = 0.5,
@@ -110,20 +116,32 @@ class ArduPilotProfile(ProfileBase):
         """ArduCopter mode name such as ``GUIDED``."""
         return copter_mode_text(custom_mode)
 
+    def arm(self) -> None:
+        """GUIDED (unless in it already), then arm, each confirmed by the HEARTBEAT."""
+        self._check_autopilot()
+        self._ensure_guided()
+        super().arm()
+
     def takeoff(self, *, altitude_m: float) -> None:
-        """GUIDED, arm, then NAV_TAKEOFF to ``altitude_m`` above home."""
+        """GUIDED and armed (each only if needed), then NAV_TAKEOFF to ``altitude_m`` above
+        home right away."""
         if not altitude_m > 0:
             raise ValueError(f"altitude_m must be positive, got {altitude_m}")
         self._check_autopilot()
-        self.set_mode(CopterMode.GUIDED)
-        self.arm()
+        self._ensure_guided()
+        hb = self.link.telemetry.heartbeat
+        if hb is None or not hb.armed:
+            super().arm()
         self.link.command_long(mavlink.MAV_CMD_NAV_TAKEOFF, (0, 0, 0, 0, 0, 0, altitude_m))
 
-    def start_offboard(self, *, z_ned: float | None = None) -> None:
-        """Make sure the vehicle is in GUIDED (ArduCopter has no separate offboard mode)."""
+    def _ensure_guided(self) -> None:
         hb = self.link.telemetry.heartbeat
         if hb is None or hb.custom_mode != CopterMode.GUIDED:
             self.set_mode(CopterMode.GUIDED)
+
+    def start_offboard(self, *, z_ned: float | None = None) -> None:
+        """Make sure the vehicle is in GUIDED (ArduCopter has no separate offboard mode)."""
+        self._ensure_guided()
         if z_ned is not None:
             self.send_setpoint(accel_xy_ned=(0.0, 0.0), z_ned=z_ned)
 

@@ -10,7 +10,8 @@ never takes over, the stream stops and PX4's offboard-loss failsafe acts.
 
 Take-off: warm-up stream of (a_xy = 0, z = current z - altitude), OFFBOARD,
 arm: PX4 climbs to the streamed z. Setpoints are x/y acceleration + z
-position. Land: MAV_CMD_NAV_LAND (AUTO.LAND).
+position. Land: MAV_CMD_NAV_LAND (AUTO.LAND). Tilt limit: ``MPC_TILTMAX_AIR``
+(degrees); integer parameters travel byte for byte.
 """
 
 from __future__ import annotations
@@ -20,8 +21,8 @@ import time
 
 from gcs.common import join_thread
 from gcs.link._errors import LinkError
-from gcs.link._link import DEFAULT_TELEMETRY_RATES_HZ, Link
-from gcs.link._profile import ProfileBase, ProfileName
+from gcs.link._link import Link
+from gcs.link._profile import REAL_AUTOPILOT_RATES_HZ, ProfileBase, ProfileName
 from gcs.wire import (
     Heartbeat,
     Px4AutoSubMode,
@@ -74,7 +75,9 @@ class Px4Profile(ProfileBase):
     landing_modes = frozenset(f"AUTO.{m.name}" for m in (Px4AutoSubMode.LAND,
                                                         Px4AutoSubMode.RTL,
                                                         Px4AutoSubMode.PRECLAND))
-    telemetry_rates_hz = DEFAULT_TELEMETRY_RATES_HZ
+    telemetry_rates_hz = REAL_AUTOPILOT_RATES_HZ
+    tilt_limit_param = "MPC_TILTMAX_AIR"  # degrees
+    params_bytewise = True
 
     def __init__(self, link: Link, *, confirm_timeout_s: float = 3.0, warmup_s: float = 1.2,
                  stream_rate_hz: float = 10.0, handover_s: float = 5.0) -> None:

@@ -16,12 +16,15 @@ Modules:
     ``_operator``  The operator's command: one object written by any source, read by the 4
                    Hz loop.
     ``_phases``    Flight phases of a transport and which operator action leads where.
+    ``_prearm``    Checks before arming: every refusal names the vehicle and the reason.
     ``_recovery``  Recovery after a setpoint gap: when vehicles that dropped to hold fly
                    again.
     ``_runtime``   The GCS loop: operator sticks in, one acceleration setpoint per vehicle
                    out, at 4 Hz.
     ``_safety``    Safety rules of the GCS loop, each enforced here and nowhere else.
     ``_stepgate``  In lockstep with the simulator, helper threads act only at ticks.
+    ``_team_frame``  One team frame: every vehicle placed in one NED frame about a team
+                   origin.
 """
 
 from gcs.loop._clock import Clock, ClockStoppedError, ExternalClock, WallClock
@@ -31,9 +34,11 @@ from gcs.loop._gamepad import Gamepad, load_gamepad_config
 from gcs.loop._geofence import FenceVerdict
 from gcs.loop._operator import OperatorCommand, OperatorSnapshot
 from gcs.loop._phases import Action, Phase, PhaseError
+from gcs.loop._prearm import Prearm, PrearmError
 from gcs.loop._runtime import Runtime, RuntimeSnapshot, TickStats
 from gcs.loop._safety import SafetyReason
 from gcs.loop._stepgate import HOLD_CAP_S, GatedClock, StepGate
+from gcs.loop._team_frame import TeamFrame
 
 __all__ = [
     "HOLD_CAP_S",
@@ -51,10 +56,13 @@ __all__ = [
     "OperatorSnapshot",
     "Phase",
     "PhaseError",
+    "Prearm",
+    "PrearmError",
     "Runtime",
     "RuntimeSnapshot",
     "SafetyReason",
     "StepGate",
+    "TeamFrame",
     "TickStats",
     "WallClock",
     "load_gamepad_config",

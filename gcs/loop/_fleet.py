@@ -76,6 +76,7 @@ class FleetTable:
         self._rows[:, _T_POS] = self._rows[:, _T_ATT] = self._rows[:, _T_HB] = -math.inf
         self._rows[:, _ARMED] = 0.0
         self._modes = ["unknown"] * n
+        self._offsets = np.zeros((n, 2))  # each local frame's place in the team frame, m
         self._lock = threading.Lock()
         for i, vid in enumerate(self.ids):
             profile = profiles[vid]
@@ -107,10 +108,22 @@ class FleetTable:
             with self._lock:
                 rows[i, _BATTERY] = math.nan if remaining is None else remaining
 
+    def shift(self, i: int, north: float, east: float) -> None:
+        """Place vehicle ``i``'s local frame in the team frame: its origin is ``north``,
+        ``east`` (m) from the team's; NaN: unknown, and so is the vehicle's position.
+
+        Why: each real autopilot has its own local origin (:mod:`gcs.loop._team_frame`);
+        the offset is added at every read, so a new one applies to the latest position.
+        """
+        with self._lock:
+            self._offsets[i] = (north, east)
+
     def read(self, now: float) -> FleetState:
-        """The team at time ``now`` (the clock that stamps the links' telemetry)."""
+        """The team at time ``now`` (the clock that stamps the links' telemetry), its
+        positions in the team frame."""
         with self._lock:
             rows = self._rows.copy()
+            rows[:, 0:2] += self._offsets
             modes = tuple(self._modes)
         yaw, tilt, age, heartbeat_age, armed = _derived(rows, now)
         return FleetState(t=now, ids=self.ids, p_ned=rows[:, _P], v_ned=rows[:, _V], yaw=yaw,

@@ -53,9 +53,11 @@ from gcs.loop._fleet import FleetState, FleetTable
 from gcs.loop._geofence import FenceVerdict, fence_demand
 from gcs.loop._operator import OperatorCommand, OperatorSnapshot
 from gcs.loop._phases import Action, Phase, PhaseError, next_phase
+from gcs.loop._prearm import Prearm, PrearmError
 from gcs.loop._recovery import Recovery
 from gcs.loop._safety import SafetyVerdict, evaluate
 from gcs.loop._stepgate import HOLD_CAP_S, StepGate
+from gcs.loop._team_frame import TeamFrame
 from gcs.wire import SETPOINT_MESSAGE, SetpointPacker, SimTruth, StatusText, TelemetryRecord
 
 __all__ = ["HELD_SETPOINT_S", "HOLD_KP", "HOLD_KV", "LINK_DELAY_CAP_S", "Event",
@@ -194,6 +196,8 @@ class Runtime:
         self.truth_source = truth_source
         self.guidance = Guidance.from_team(team)
         self.analysis: Analysis = analysis if analysis is not None else analyze(team)
+        self.analysis_override = False
+        """Fly although the analysis fails (``--override-analysis``): the user's call."""
         self._accel_last = 0.0
         self.period = 1.0 / team.config.guidance.rate_hz
         self._streaming_modes = tuple(p.streaming_mode for p in self._profile_list)
@@ -266,6 +270,10 @@ class Runtime:
             for vid in self.ids:
                 profiles[vid].link.add_frame_listener(
                     lambda _direction, frame: recorder.frame(self.clock.now(), frame))
+        self.team_frame = TeamFrame(team, profiles, self.fleet_table, note=self.note)
+        """Where each vehicle's local frame lies in the team frame the fleet table reads in."""
+        self.prearm = Prearm(team, self.analysis, self.team_frame, profiles, note=self.note)
+        """The checks an arm must pass."""
 
     # -- state ---------------------------------------------------------------------------
 
@@ -385,6 +393,8 @@ class Runtime:
     def _run_action(self, action: Action, target: Phase) -> None:
         try:
             if action is Action.ARM:
+                self.prearm.check(lambda: self.fleet_table.read(self.clock.now()),
+                                  scale=self.operator.snapshot(self.clock.now()).demand.scale)
                 self._for_all("arm", lambda p: p.arm())
                 self._set_phase(target)
             elif action is Action.DISARM:
@@ -399,7 +409,7 @@ class Runtime:
                 self._resume()
         except Exception as exc:  # report, never kill the worker
             self._event("error", f"{action.text} failed: {exc}")
-            if action is Action.ARM:
+            if action is Action.ARM and not isinstance(exc, PrearmError):  # none armed
                 self._for_all("disarm", lambda p: p.disarm(), quiet=True)
                 self._set_phase(Phase.READY)
         finally:
@@ -566,7 +576,7 @@ class Runtime:
     def _preflight(self, fleet: FleetState) -> None:
         fresh = np.isfinite(fleet.age) & (fleet.age < self.team.config.safety.stale_after)
         if fresh.all() and np.all(np.isfinite(fleet.heartbeat_age)):
-            if not self.analysis.ok:
+            if not self.analysis.ok and not self.analysis_override:
                 self._warn_once(("analysis", 0), "pre-flight: gcs analyze fails: " +
                                 self.analysis.violations[0].message)
                 return
@@ -797,13 +807,16 @@ class Runtime:
         if fleet.modes == self._modes_seen:  # one comparison on most ticks, not one per vehicle
             return
         self._modes_seen = fleet.modes
-        for vid, mode in zip(fleet.ids, fleet.modes, strict=True):
+        for vid, mode, streaming in zip(fleet.ids, fleet.modes, self._streaming_modes,
+                                        strict=True):
             before = self._modes.get(vid)
             self._modes[vid] = mode
             if before is not None and mode != before:
                 # from lifting on, every vehicle must stay in the mode the GCS put it in
+                # (its streaming mode, whose HEARTBEAT may come after the lift began)
                 level = "warning" if phase in (Phase.LIFTING, Phase.FORMATION,
-                                               Phase.SETTING_DOWN) else "info"
+                                               Phase.SETTING_DOWN) and mode != streaming \
+                    else "info"
                 self._event(level, f"vehicle {vid}: mode {mode} (was {before})")
 
     def _report_safety(self, verdict: SafetyVerdict) -> None:
@@ -848,6 +861,9 @@ class Runtime:
             self._tick_forever(stop)
         finally:
             done.set()
+            # No more ticks: release whoever waits for one (a scenario parked at the gate
+            # when the sim clock stopped waited for ever), so that they see why.
+            self.gate.close()
             if keeper is not None:
                 keeper.join(timeout=1.0)
 

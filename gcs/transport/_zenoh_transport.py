@@ -62,6 +62,7 @@ class FleetReceiver:
         self._max_payload = max_payload
         self.oversize = 0
         """Payloads dropped for being longer than ``max_payload`` bytes."""
+        self._oversize_of: dict[int, int] = {}
         self._handlers: dict[int, Callable[[bytes], None]] = {}
         self._arrivals = Arrivals()  # payloads per system id, registered or not
         self._subscriber: zenoh.Subscriber | None = session.declare_subscriber(
@@ -72,6 +73,10 @@ class FleetReceiver:
         if sysid in self._handlers:
             raise RuntimeError(f"vehicle {sysid} already has a receiver")
         self._handlers = {**self._handlers, sysid: on_bytes}  # replaced whole: read lock-free
+
+    def oversize_of(self, sysid: int) -> int:
+        """Payloads of vehicle ``sysid`` dropped for being too long."""
+        return self._oversize_of.get(sysid, 0)
 
     def unregister(self, sysid: int) -> None:
         """Stop delivering vehicle ``sysid``'s payloads."""
@@ -94,6 +99,7 @@ class FleetReceiver:
             data = bounded_payload(sample, self._max_payload)
             if data is None:
                 self.oversize += 1
+                self._oversize_of[sysid] = self._oversize_of.get(sysid, 0) + 1
             else:
                 handler(data)
         self._arrivals.arrived(sysid)  # after the handler: a waiter goes on once it is in
@@ -177,10 +183,10 @@ class ZenohTransport:
 
     @property
     def oversize(self) -> int:
-        """Payloads received and dropped for being too long (through the shared
-        :class:`FleetReceiver`, if any, for the whole fleet)."""
+        """Payloads for this link received and dropped for being too long."""
         if self._receiver is not None:
-            return self._receiver.oversize
+            assert self._rx_sysid is not None
+            return self._receiver.oversize_of(self._rx_sysid)
         return self._oversize
 
     @property

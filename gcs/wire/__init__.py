@@ -14,7 +14,10 @@ Modules:
                     dropped.
     ``_dialect``    The one pymavlink dialect the project speaks, and name look-ups into it.
     ``_encoder``    MAVLink 2 encoding for one sender (the GCS, or one simulated vehicle).
+    ``_geodetic``   Geodetic positions and local NED frames on the WGS-84 ellipsoid.
     ``_modes``      Flight-mode numbers of every autopilot the GCS drives, in one place.
+    ``_seal``       Authenticated zenoh payloads that are not MAVLink: clock, clock ack,
+                    truth, control.
     ``_setpoints``  Acceleration setpoints as ``SET_POSITION_TARGET_LOCAL_NED`` (frame
                     LOCAL_NED).
     ``_signing``    MAVLink 2 message signing: key files and the check of incoming
@@ -50,20 +53,33 @@ from gcs.wire._encoder import (
     MavlinkEncoder,
     distinct_rows,
 )
+from gcs.wire._geodetic import (
+    Geodetic,
+    ecef_to_geodetic,
+    geodetic_to_ecef,
+    geodetic_to_ned,
+    ned_to_geodetic,
+)
 from gcs.wire._modes import (
     CUSTOM_MODE_ENABLED,
     SAFETY_ARMED,
+    SIM_PX4_MODES,
     CopterMode,
     Px4AutoSubMode,
     Px4MainMode,
     SimMode,
     copter_mode_text,
     heartbeat_mode_text,
+    px4_base_mode,
+    px4_custom_mode,
     px4_mode_text,
+    sim_mode_for_px4,
+    sim_mode_of,
     sim_mode_text,
     split_px4_custom_mode,
 )
 from gcs.wire._results import CommandResult
+from gcs.wire._seal import SEAL_OVERHEAD, Sealer, SealError, Unsealer
 from gcs.wire._setpoints import (
     SETPOINT_MESSAGE,
     AccelSetpoint,
@@ -73,7 +89,13 @@ from gcs.wire._setpoints import (
     accel_setpoint_fields,
     read_setpoint,
 )
-from gcs.wire._signing import SigningKey, load_signing_key
+from gcs.wire._signing import (
+    SigningKey,
+    load_signing_key,
+    parse_signing_key,
+    signing_timestamp,
+    write_signing_key,
+)
 from gcs.wire._simtruth import TRUTH_MAX_BYTES, SimTruth, vec3
 from gcs.wire._stamp import crc_accumulate
 from gcs.wire._telemetry import (
@@ -98,7 +120,9 @@ __all__ = [
     "DEFAULT_GCS_SYSTEM_ID",
     "OFFBOARD_LOST_TEXT",
     "SAFETY_ARMED",
+    "SEAL_OVERHEAD",
     "SETPOINT_MESSAGE",
+    "SIM_PX4_MODES",
     "TELEMETRY_MAX_ABS",
     "TRUTH_MAX_BYTES",
     "AccelSetpoint",
@@ -110,12 +134,15 @@ __all__ = [
     "DecodeStats",
     "EncoderBatch",
     "FrameDecoder",
+    "Geodetic",
     "Heartbeat",
     "LocalPosition",
     "MavMessage",
     "MavlinkEncoder",
     "Px4AutoSubMode",
     "Px4MainMode",
+    "SealError",
+    "Sealer",
     "SetpointKind",
     "SetpointPacker",
     "Severity",
@@ -128,6 +155,7 @@ __all__ = [
     "TelemetryRecord",
     "TelemetryStore",
     "TypeMask",
+    "Unsealer",
     "accel_setpoint_fields",
     "command_name",
     "copter_mode_text",
@@ -135,20 +163,31 @@ __all__ = [
     "decode_clock",
     "decode_time",
     "distinct_rows",
+    "ecef_to_geodetic",
     "encode_clock",
     "encode_time",
     "frame_crc",
+    "geodetic_to_ecef",
+    "geodetic_to_ned",
     "heartbeat_mode_text",
     "keys",
     "load_signing_key",
     "mavlink",
     "message_id",
+    "ned_to_geodetic",
+    "parse_signing_key",
+    "px4_base_mode",
+    "px4_custom_mode",
     "px4_mode_text",
     "read_setpoint",
+    "signing_timestamp",
+    "sim_mode_for_px4",
+    "sim_mode_of",
     "sim_mode_text",
     "split_px4_custom_mode",
     "unpack_v2",
     "vec3",
+    "write_signing_key",
 ]
 
 __getattr__ = lazy_modules(__name__, ("keys",))

@@ -1,0 +1,15 @@
+"""Standard gravity: the one value the simulator, the airframe checks and the analysis share.
+
+Why one constant: the simulator used 9.81 m/s^2 and the analysis 9.80665, so a
+hover measured in the simulator and the analysis' prediction of it differed by
+0.03 % before any physics did.
+"""
+
+from __future__ import annotations
+
+__all__ = ["STANDARD_GRAVITY"]
+
+STANDARD_GRAVITY = 9.80665
+"""m/s^2, the conventional value. The paper's figures do not tell the two apart: its
+vertical load (0.4 + 0.4 / 3) g, printed 5.22 N, is 5.230 N with this and 5.232 N with
+9.81."""

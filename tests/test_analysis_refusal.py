@@ -1,0 +1,51 @@
+"""A team that ``gcs analyze`` refuses is not flown: ``gcs fly``, ``gcs run`` and ``gcs demo``
+say so at once with every violation (they used to sit in "connect" for 120 s of sim time,
+then name the first violation only)."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import pytest
+
+from gcs.analysis import analyze
+from gcs.config import load_team
+from tests.conftest import SHORT, run_gcs
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture(scope="module")
+def refused_team(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The paper's square under a payload it cannot carry."""
+    text = (ROOT / "configs" / "bebop_square.yaml").read_text().replace(
+        "airframes/bebop2.yaml", str(ROOT / "configs" / "airframes" / "bebop2.yaml"))
+    path = tmp_path_factory.mktemp("refused") / "heavy.yaml"
+    lines = text.splitlines()
+    start = lines.index("payload:")
+    for k in range(start + 1, len(lines)):
+        if lines[k].strip().startswith("mass:"):
+            lines[k] = "  mass: 1.6"
+            break
+    path.write_text("\n".join(lines) + "\n")
+    assert len(analyze(load_team(path)).violations) >= 2
+    return path
+
+
+@pytest.mark.parametrize("command", [
+    ("fly", "--config", "{config}", "--scenario", SHORT),
+    ("run", "--config", "{config}", "--port", "0"),
+    ("demo", "--config", "{config}", "--port", "0"),
+])
+def test_a_refused_team_is_not_flown(refused_team: Path, command: tuple[str, ...]) -> None:
+    start = time.monotonic()
+    out = run_gcs(*(a.format(config=refused_team) for a in command), timeout=120)
+    elapsed = time.monotonic() - start
+    assert out.returncode == 1, out.stdout + out.stderr
+    violations = analyze(load_team(refused_team)).violations
+    lines = out.stderr.splitlines()
+    assert lines[0].startswith(f"gcs {command[0]}: error: ") and "--override-analysis" in lines[0]
+    assert [line.strip() for line in lines[1:]] == [f"{v.term}: {v.message}" for v in violations]
+    assert "signing" not in out.stderr and "starting" not in out.stdout  # nothing started
+    assert elapsed < 60, elapsed  # not the 120 s of a flight that waits in "connect"

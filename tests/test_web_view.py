@@ -1,0 +1,207 @@
+"""What a viewer sees in a real browser: the camera on the team, the events grouped.
+
+The paper's team flies in formation in lockstep with the real simulator
+(``tests.test_safety_flight.in_formation``) and is flown about 3 m from the
+origin; its page (:class:`web.WebUi`) is served in this process and viewed by
+headless Chromium (Playwright). Each viewer's camera is read on the server
+(``client.camera``: what the browser reports, after it applied what it was
+sent). The tests share the flight and run in file order: a viewer joins far
+from the origin, centres on the team, then the vehicles' links are cut four at a
+time, three times over, and the page shows that storm as one line.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import numpy as np
+import pytest
+import viser
+
+from gcs.app import GcsApp, free_tcp_port
+from tests.test_safety_flight import break_vehicle, in_formation, sim_sleep
+from tests.test_web_browser import SCENE_GREEN_MIN, headless_chromium, scene_pixels, wait_for
+from web import WebUi
+
+AWAY = 3.0
+"""How far from the origin the team is when a viewer joins, m."""
+ON_TEAM = 0.3
+"""A camera looks at the team when the point it looks at is this close to the team's
+centroid, horizontally, m."""
+FAR = 10.0
+"""... and stands no farther than this from it, m."""
+
+
+@pytest.fixture(scope="module")
+def flight() -> Iterator[GcsApp]:
+    """The team in formation, at least :data:`AWAY` from the origin, nearly still."""
+    with in_formation() as app:
+        while np.hypot(*centroid(app)[:2]) < 1.0:  # diagonally: away from both fences
+            app.operator.set_sticks(0.6, 0.6, 0.0, now=app.clock.now(), source="test")
+            sim_sleep(app, 0.25)
+        app.operator.set_sticks(0.0, 0.0, 0.0, now=app.clock.now(), source="test")
+        while np.hypot(*centroid(app)[:2]) < AWAY:  # it coasts on (c1 = 0.17/s brakes gently)
+            sim_sleep(app, 0.25)
+        yield app
+
+
+@pytest.fixture(scope="module")
+def page_ui(flight: GcsApp) -> Iterator[WebUi]:
+    ui = WebUi(flight, port=free_tcp_port())
+    ui.start()
+    try:
+        yield ui
+    finally:
+        ui.close()
+
+
+@pytest.fixture(scope="module")
+def browser(tmp_path_factory):  # type: ignore[no-untyped-def]
+    yield from headless_chromium(tmp_path_factory)
+
+
+def centroid(app: GcsApp) -> np.ndarray:
+    """The team's centroid from its latest telemetry, NED, m."""
+    return app.runtime.fleet_table.read(app.clock.now()).p_ned.mean(axis=0)
+
+
+def open_viewer(browser, ui: WebUi):  # type: ignore[no-untyped-def]
+    """A new browser page on the flight's page, and the server's handle of it."""
+    before = set(ui.server.get_clients())
+    page = browser.new_context(viewport={"width": 1400, "height": 800}).new_page()
+    page.goto(ui.url)
+    page.get_by_role("button", name="ABORT: hold, then land").wait_for(timeout=60_000)
+    wait_for(lambda: bool(set(ui.server.get_clients()) - before), 10, "the viewer connected")
+    new = max(set(ui.server.get_clients()) - before)  # the latest, had the page reconnected
+    return page, ui.server.get_clients()[new]
+
+
+def off_team(client: viser.ClientHandle, app: GcsApp) -> float:
+    """How far the point the viewer's camera looks at is from the team, horizontally, m."""
+    return float(math.hypot(*(client.camera.look_at - centroid(app))[:2]))
+
+
+def looks_at_team(client: viser.ClientHandle, app: GcsApp) -> bool:
+    """The viewer's camera looks at the team from close enough to see it."""
+    c = centroid(app)
+    camera = client.camera
+    return bool(math.hypot(*(camera.look_at - c)[:2]) < ON_TEAM
+                and np.linalg.norm(camera.position - c) < FAR)
+
+
+def in_view(client: viser.ClientHandle, points: np.ndarray) -> bool:
+    """Every point lies inside the viewer's field of view (the narrower, horizontal or
+    vertical, with a margin)."""
+    camera = client.camera
+    forward = camera.look_at - camera.position
+    forward /= np.linalg.norm(forward)
+    half = 0.45 * camera.fov  # vertical half-angle 0.5 * fov, less a margin
+    to = points - camera.position
+    angle = np.arccos(np.clip(to @ forward / np.linalg.norm(to, axis=1), -1.0, 1.0))
+    return bool(np.all(angle < half))
+
+
+def camera_text(client: viser.ClientHandle, app: GcsApp) -> str:
+    camera = client.camera
+    return (f"camera at {np.round(camera.position, 2)} looking at "
+            f"{np.round(camera.look_at, 2)}; the team at {np.round(centroid(app), 2)}")
+
+
+def test_a_viewer_joining_far_from_the_origin_sees_the_team(flight: GcsApp, page_ui: WebUi,
+                                                            browser, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    """The team is 3 m from the origin when a new viewer opens the page: its camera looks
+    at the team (it looked at the origin, whatever the team's place), every vehicle is in
+    its field of view and on its screen."""
+    away = float(np.hypot(*centroid(flight)[:2]))
+    assert away >= AWAY, f"the team is {away:.2f} m from the origin"
+    page, client = open_viewer(browser, page_ui)
+    try:
+        wait_for(lambda: looks_at_team(client, flight), 10, "the camera on the team",
+                 lambda: camera_text(client, flight))
+        vehicles = flight.runtime.fleet_table.read(flight.clock.now()).p_ned
+        assert in_view(client, vehicles), camera_text(client, flight)
+        shot = tmp_path / "joined-away.png"
+        green, _ = scene_pixels(page, shot)
+        print(f"joined {away:.2f} m from the origin: {camera_text(client, flight)}; "
+              f"{green} ok-green pixels ({shot})")
+        assert green > SCENE_GREEN_MIN, f"{green} vehicle pixels on screen; see {shot}"
+    finally:
+        page.context.close()
+
+
+def pan_away(page) -> None:  # type: ignore[no-untyped-def]
+    """Drag the 3-D view with the right button, as a viewer pans it (camera-controls)."""
+    canvases = page.locator("canvas[data-engine^='three.js']")
+    boxes = [canvases.nth(k).bounding_box() for k in range(canvases.count())]
+    box = max(boxes, key=lambda b: b["width"] * b["height"])
+    x, y = box["x"] + 0.1 * box["width"], box["y"] + box["height"] / 2
+    page.mouse.move(x, y)
+    page.mouse.down(button="right")
+    page.mouse.move(x + 0.8 * box["width"], y + 0.1 * box["height"], steps=16)
+    page.mouse.up(button="right")
+
+
+def test_centre_on_team_by_key_and_by_button(flight: GcsApp, page_ui: WebUi,
+                                             browser) -> None:  # type: ignore[no-untyped-def]
+    """The viewer pans the view off the team (the camera keeps that pan as the team moves,
+    the viewer chose it); C, and the View folder's button, bring it back on the team."""
+    page, client = open_viewer(browser, page_ui)
+    try:
+        wait_for(lambda: looks_at_team(client, flight), 10, "the camera on the team",
+                 lambda: camera_text(client, flight))
+        for press in (lambda: page.keyboard.press("c"),
+                      lambda: page.get_by_role("button", name="Centre on team").click()):
+            pan_away(page)
+            wait_for(lambda: off_team(client, flight) > 1.5, 5, "the view panned off the team",
+                     lambda: camera_text(client, flight))
+            time.sleep(0.5)  # the page keeps the viewer's pan
+            assert off_team(client, flight) > 1.5, camera_text(client, flight)
+            press()
+            wait_for(lambda: looks_at_team(client, flight), 5, "the camera back on the team",
+                     lambda: camera_text(client, flight))
+    finally:
+        page.context.close()
+
+
+STALE_LINE = re.compile(r"no fresh telemetry for [0-9.]+ s: motion frozen ×(\d+)"
+                        r" — vehicles 1,2,3,4")
+
+
+def test_an_event_storm_is_one_line_with_its_count(flight: GcsApp, page_ui: WebUi,
+                                                   browser) -> None:  # type: ignore[no-untyped-def]
+    """Every vehicle's link cut at once, three times: twelve "no fresh telemetry"
+    warnings, shown as one line with their count and the four vehicles; the log's level
+    filter hides the information lines, in this viewer only."""
+    page, _ = open_viewer(browser, page_ui)
+    other, _ = open_viewer(browser, page_ui)
+    try:
+        for _ in range(3):
+            for vid in (1, 2, 3, 4):
+                break_vehicle(flight, "cut", vid)
+            sim_sleep(flight, 1.0)
+            for vid in (1, 2, 3, 4):
+                break_vehicle(flight, "restore", vid)
+            sim_sleep(flight, 2.0)
+        conditions = page.locator("[data-gcs=conditions]")
+        wait_for(lambda: "×12" in conditions.inner_text(), 10, "the storm's count",
+                 lambda: conditions.inner_text())
+        stale = [line for line in conditions.inner_text().splitlines()
+                 if "no fresh telemetry" in line]
+        print(f"the storm on the page: {stale}")
+        assert len(stale) == 1 and STALE_LINE.search(stale[0]), stale
+        assert int(STALE_LINE.search(stale[0]).group(1)) == 12  # type: ignore[union-attr]
+
+        log = page.locator("[data-gcs=event-log] [data-level=info]")
+        assert log.count() > 0 and log.first.is_visible()
+        page.get_by_label("errors", exact=True).check()
+        wait_for(lambda: not log.first.is_visible(), 5, "the information lines hidden")
+        assert other.locator("[data-gcs=event-log] [data-level=info]").first.is_visible()
+        page.get_by_label("all", exact=True).check()
+        wait_for(lambda: log.first.is_visible(), 5, "the information lines shown again")
+    finally:
+        page.context.close()
+        other.context.close()

@@ -1,0 +1,202 @@
+"""Where each viewer's camera looks: framed on the team, following it, centred on demand.
+
+Why here and per viewer: every browser has its own camera (viser's
+``client.camera``), and what goes wrong is per viewer: one who joins while the
+team is away from the origin, one who orbited, one whose camera fell behind.
+
+* **First view**: the first frame that knows where the team is frames it
+  (:func:`team_view`: looking at its centroid from behind and above, far enough
+  for the whole team), whatever the team's distance from the origin.
+* **Follow**: the point looked at moves with the team, absolutely, not by
+  adding the team's motion to the camera the browser last reported: a report
+  still on its way from before the last move would otherwise undo that move,
+  and the camera fell further behind with every one. The viewer's own choices
+  are kept: orbit and zoom (the camera's offset from the point it looks at),
+  and a pan (where the viewer moved that point, relative to the team). A
+  reported point that is none of those this view set lately is the viewer's
+  pan; while the viewer's hand is on the camera (a report this view did not
+  set, in the last :data:`HANDS_OFF_S`) the camera is not moved from under it.
+* **Centre on team** (the View folder's button, key C): looks at the team again
+  from the viewer's side at the framing distance and height; the pan is gone.
+  The same happens when the team has landed.
+
+Plain maths (:func:`team_view`) apart from the viser calls, so the framing is
+tested without a browser.
+"""
+
+from __future__ import annotations
+
+import collections
+import math
+import threading
+import time
+from typing import Literal
+
+import numpy as np
+import viser
+
+__all__ = ["CENTRE_HOTKEY", "CENTRE_LABEL", "FOLLOW_STEP", "FRAME_AGAIN_S", "HANDS_OFF_S",
+           "MIN_VIEW_DISTANCE", "ViewControls", "team_view"]
+
+FOLLOW_STEP = 0.02
+"""The camera follows the team in steps of at least this, m (telemetry noise stays put)."""
+
+CENTRE_LABEL = "Centre on team"
+"""The View folder's button and the command palette's name of the centring."""
+
+CENTRE_HOTKEY: Literal["C"] = "C"
+"""Key of the centring (viser command hotkey, no modifier)."""
+
+MIN_VIEW_DISTANCE = 4.3
+"""Closest a framed view stands from the team's centroid, m (the square team fills about
+half the view's height at it)."""
+
+_VIEW_DIRECTION = np.array([-3.4, -1.0, -2.4]) / math.hypot(3.4, 1.0, 2.4)
+"""From the point looked at to the camera, NED: behind (south, the team's forward is
+north), a little west, and 34 degrees above."""
+
+_FRAME_FACTOR = 3.5
+"""Framing distance per metre of the team's reach (75 degree field of view, margin)."""
+
+_MATCH = 1e-3
+"""A reported point looked at within this of one this view set is that one, m."""
+
+FRAME_AGAIN_S = 0.5
+"""A framing the browser has not shown after this long is sent again, s."""
+
+HANDS_OFF_S = 0.5
+"""The camera follows only once the viewer has left it alone this long, s."""
+
+
+def team_view(centroid: np.ndarray, team_reach: float,
+              direction: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Camera position and the point it looks at, framing a team (NED, m).
+
+    ``direction`` (from the point looked at towards the camera) gives the bearing
+    to view from (its height is replaced by the framing's); default: behind and
+    to the left, as the page's first view.
+    """
+    look_at = np.asarray(centroid, dtype=float)
+    d = _VIEW_DIRECTION.copy()
+    if direction is not None and math.hypot(direction[0], direction[1]) > 1e-6:
+        horizontal = math.hypot(_VIEW_DIRECTION[0], _VIEW_DIRECTION[1])
+        bearing = math.atan2(direction[1], direction[0])
+        d[0], d[1] = horizontal * math.cos(bearing), horizontal * math.sin(bearing)
+    distance = max(MIN_VIEW_DISTANCE, _FRAME_FACTOR * team_reach)
+    return look_at + distance * d, look_at
+
+
+class ViewControls:
+    """One viewer's camera and its View folder: "camera follows team", "Centre on team".
+
+    Args:
+        client: the viewer.
+        order: where the folder goes in the viewer's panel.
+    """
+
+    def __init__(self, client: viser.ClientHandle, *, order: float | None = None) -> None:
+        self.client = client
+        gui = client.gui
+        with gui.add_folder("View", order=order):
+            self.follow = gui.add_checkbox("camera follows team", True,
+                                           hint="Orbit and zoom as you like: the view "
+                                                "moves with the team.")
+            self._centre_button = gui.add_button(CENTRE_LABEL, icon=viser.Icon.FOCUS_CENTERED,
+                                                 hint=f"Key {CENTRE_HOTKEY}: look at the "
+                                                      "team again.")
+        self._centre_button.on_click(lambda _: self.request_centre())
+        self._lock = threading.Lock()
+        self._centre_asked = False
+        self._framed = False
+        self._shown = False  # the browser reported a view this one set since the framing
+        self._framed_at = -math.inf  # when the framing was last sent (monotonic s)
+        self._pan: np.ndarray | None = None  # where the viewer moved the point looked at
+        self._side: np.ndarray | None = None  # the framing's side of the team (None: the
+        # first view's)
+        self._set: collections.deque[np.ndarray] = collections.deque(maxlen=16)
+        self._set_at: collections.deque[np.ndarray] = collections.deque(maxlen=16)  # positions
+        self._viewer_at = -math.inf  # when the viewer last moved the camera (monotonic s)
+        client.camera.on_update(self._on_report)
+
+    def _on_report(self, camera: viser.CameraHandle) -> None:
+        """The browser said where its camera is (viser's thread pool): a view this one set,
+        or the viewer's own hand on the camera."""
+        look_at = np.array(camera.look_at, dtype=float)
+        if not self._was_set(look_at):
+            self._viewer_at = time.monotonic()
+            return
+        with self._lock:
+            placed = list(self._set_at)
+        if not any(float(np.max(np.abs(camera.position - p))) < _MATCH for p in placed):
+            self._viewer_at = time.monotonic()  # orbiting or zooming about our point
+        self._shown = True
+
+    def request_centre(self) -> None:
+        """Centre on the team at the next frame (any thread: a click, the hotkey)."""
+        with self._lock:
+            self._centre_asked = True
+
+    def update(self, centroid: np.ndarray | None, team_reach: float, *,
+               reframe: bool = False) -> None:
+        """Once per frame, with the team's centroid (None: unknown) and reach, m.
+
+        ``reframe``: the team has just landed; frame it again, as for a new viewer,
+        if this viewer follows it.
+        """
+        if centroid is None or not np.isfinite(centroid).all():
+            return
+        with self._lock:
+            asked, self._centre_asked = self._centre_asked, False
+        camera = self.client.camera
+        look_at = np.array(camera.look_at, dtype=float)
+        stale = not self._shown and not self._was_set(look_at)
+        if not self._framed or asked or (reframe and self.follow.value) or (
+                stale and time.monotonic() - self._framed_at >= FRAME_AGAIN_S):
+            # a new viewer: the page's first view; else from the viewer's own side. Framed
+            # again until the browser shows it: one that was still loading put its first
+            # camera back over the framing, and reported that.
+            if asked or reframe:
+                self._side = camera.position - camera.look_at
+            direction = self._side
+            self._framed, self._shown = True, False
+            self._framed_at = time.monotonic()
+            self._pan = np.zeros(3)
+            self._move(*team_view(centroid, team_reach, direction))
+            return
+        if stale:
+            return
+        if not self.follow.value:
+            self._pan = None
+            return
+        if self._pan is None or not self._was_set(look_at):
+            self._pan = look_at - centroid  # follow from here: the viewer's own view
+            self._known(look_at)  # known from now on, as the ones this view set
+        target = centroid + self._pan
+        if float(np.linalg.norm(target - look_at)) < FOLLOW_STEP:
+            return
+        if time.monotonic() - self._viewer_at < HANDS_OFF_S:
+            return  # a move now would pull the camera from under the viewer's drag
+        self._move(target + (camera.position - look_at), target)
+
+    def _was_set(self, look_at: np.ndarray) -> bool:
+        with self._lock:  # the reports come on viser's threads
+            known = list(self._set)
+        return any(float(np.max(np.abs(look_at - s))) < _MATCH for s in known)
+
+    def _known(self, look_at: np.ndarray) -> None:
+        with self._lock:
+            self._set.append(np.array(look_at, dtype=float))
+
+    def _move(self, position: np.ndarray, look_at: np.ndarray) -> None:
+        """Put the camera at ``position`` looking at ``look_at``, in one message batch.
+
+        viser's position setter carries look_at along by the same shift; look_at is
+        then set to where it must end up (a no-op when the shift put it there).
+        """
+        self._known(look_at)
+        with self._lock:
+            self._set_at.append(np.array(position, dtype=float))
+        camera = self.client.camera
+        with self.client.atomic():
+            camera.position = position
+            camera.look_at = look_at
