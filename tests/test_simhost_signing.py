@@ -49,6 +49,7 @@ def test_signed_team_flies_only_with_the_key(tmp_path: Path) -> None:
                          base_dir=tmp_path) as manager:
             manager.profiles[1].arm()  # signed both ways: acknowledged and confirmed
             assert manager.links[1].health.refused_signature == 0
+            assert manager.links[1].health.signed  # the page shows no unsigned banner
             assert manager.session is not None
             stranger = Link(2, ZenohTransport.for_gcs(manager.session, fleet=fleet, sysid=2),
                             command_timeout_s=0.3, command_retries=1,

@@ -27,6 +27,7 @@ from web._status import (
     event_filter_html,
     events_html,
     position_sources,
+    signing_banner_html,
     summary_html,
     vehicles_html,
 )
@@ -252,3 +253,14 @@ def test_the_position_source_follows_the_team_frame() -> None:
     told = dataclasses.replace(mixed, config=dataclasses.replace(
         mixed.config, team_frame=dataclasses.replace(mixed.config.team_frame, mode="shared")))
     assert set(position_sources(told).values()) == {"local NED (shared)"}
+
+
+def test_unsigned_links_are_a_red_banner() -> None:
+    assert signing_banner_html([]) == ""
+    one = signing_banner_html([3])
+    assert 'data-gcs-banner="signing"' in one and "#c0392b" in one
+    assert "UNSIGNED LINK: vehicle 3 obeys anyone" in one
+    assert "vehicles 1, 2 obey anyone" in signing_banner_html([1, 2])
+    page = summary_html(snapshot(), loop=None, control="", ui=None, unsigned=[2])
+    assert "UNSIGNED LINK: vehicle 2" in page
+    assert "UNSIGNED" not in summary_html(snapshot(), loop=None, control="", ui=None)

@@ -89,8 +89,9 @@ def rope_legend(measured: bool) -> str:
 
 
 def summary_html(snap: RuntimeSnapshot | None, *, loop: TickStats | None, control: str,
-                 ui: UiStats | None) -> str:
-    """Phase, operator command, control holder, payload, safety verdict and loop timing."""
+                 ui: UiStats | None, unsigned: Sequence[int] = ()) -> str:
+    """Phase, operator command, control holder, payload, safety verdict and loop timing;
+    ``unsigned``: vehicles whose link is not signed (a red banner)."""
     if snap is None:
         return '<div style="padding:4px 8px">waiting for the first guidance tick…</div>'
     op = snap.operator
@@ -110,7 +111,7 @@ def summary_html(snap: RuntimeSnapshot | None, *, loop: TickStats | None, contro
         else math.nan
     return (
         '<div style="padding:2px 8px;font-size:0.85em;line-height:1.5">'
-        f'{safety_banner_html(snap)}{banners_html(snap)}'
+        f'{safety_banner_html(snap)}{signing_banner_html(unsigned)}{banners_html(snap)}'
         f'<div>phase <b data-gcs="phase" style="font-size:1.2em">{snap.phase.text}</b>'
         f' · worst distance error '
         f'<span data-gcs="worst-error">{_num(worst, ".3f", " m")}</span></div>'
@@ -148,6 +149,21 @@ def safety_banner_html(snap: RuntimeSnapshot) -> str:
         text = f"{text}: {reasons}"
     return (f'<div data-gcs-banner="safety" data-gcs-safety="{state}" '
             f'style="{_BANNER}{colour}">{html.escape(text)}</div>')
+
+
+def signing_banner_html(unsigned: Sequence[int]) -> str:
+    """A red banner while any vehicle's link is unsigned: anyone who reaches its port or
+    radio commands it (``--insecure``, or a real autopilot without the team key)."""
+    if not unsigned:
+        return ""
+    ids = ", ".join(str(v) for v in unsigned)
+    text = (f"UNSIGNED LINK{'S' if len(unsigned) > 1 else ''}: vehicle"
+            f"{'s' if len(unsigned) > 1 else ''} {ids} obey{'' if len(unsigned) > 1 else 's'} "
+            f"anyone who reaches {'their' if len(unsigned) > 1 else 'its'} link (MAVLink "
+            f"signing off; see gcs key)")
+    return (f'<div data-gcs-banner="signing" style="background:#c0392b;color:#fff;'
+            f'font-weight:bold;padding:3px 8px;margin:2px 0;border-radius:3px">'
+            f"{html.escape(text)}</div>")
 
 
 def banners_html(snap: RuntimeSnapshot) -> str:

@@ -312,8 +312,9 @@ class WebUi:
         quality = self._quality.update(time.monotonic(), health)
         new_events = self._event_log.take(app.loop.events())
         with self.server.atomic():
-            self._summary.content = summary_html(snap, loop=app.loop.stats(),
-                                                 control=self._control_text(), ui=self.stats())
+            self._summary.content = summary_html(
+                snap, loop=app.loop.stats(), control=self._control_text(), ui=self.stats(),
+                unsigned=[vid for vid, h in health.items() if not h.signed])
             self._vehicles.content = vehicles_html(
                 snap, health=health, truth=snap.truth, mass=app.team.config.airframe.mass,
                 stale_after=self._view.stale_after, voltage=voltage, quality=quality,
