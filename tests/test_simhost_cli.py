@@ -250,3 +250,18 @@ def test_gcs_sim_hosts_the_team_with_sitl_style_udp_ports_and_stops_on_sigint() 
         if proc.poll() is None:
             proc.kill()
             proc.communicate(timeout=10)
+
+
+def test_a_slow_start_is_said_not_silent() -> None:
+    """The first ``gcs demo`` sat 68 s silent while the kernels compiled: it looked hung.
+    A simulator that is not ready yet is now told every few seconds (here one that never
+    becomes ready: a shell that sleeps, in the simulator's place)."""
+    from gcs.app import SimProcess
+    from gcs.app._simprocess import SimStartError
+
+    said: list[str] = []
+    with pytest.raises(SimStartError, match="was not ready after 6 s"):
+        SimProcess(CONFIG, endpoint=f"tcp/127.0.0.1:{free_tcp_port()}", ready_timeout=6.0,
+                   wrap=lambda *cmd: ["sh", "-c", "sleep 30"], progress=said.append)
+    assert said and said[0].startswith("the simulator is still starting (5 s): its first "
+                                       "start compiles its kernels"), said

@@ -23,6 +23,10 @@ from typing import IO
 __all__ = ["SimProcess", "SimStartError", "free_tcp_port"]
 
 
+_FIRST_NOTE_S = 5.0
+_NOTE_PERIOD_S = 15.0
+
+
 class SimStartError(RuntimeError):
     """The simulator did not come up; carries what it printed."""
 
@@ -51,6 +55,8 @@ class SimProcess:
         speed: sim seconds per wall second, or ``"max"``.
         lockstep: let the GCS's clock acks pace the sim (headless, deterministic).
         signing: False starts it ``--insecure`` (no MAVLink signing).
+        progress: told a line every few seconds while the simulator is not ready yet (its
+            first start compiles its kernels, which can take a minute: not a hang).
         extra: more command-line arguments for the sim.
         ready_timeout: how long to wait for its ready line, s.
         wrap: turns the command into the one to run, e.g. on another host
@@ -60,7 +66,8 @@ class SimProcess:
     def __init__(self, config: str | Path, *, endpoint: str, speed: str = "1",
                  lockstep: bool = False, signing: bool = True, extra: tuple[str, ...] = (),
                  ready_timeout: float = 60.0,
-                 wrap: Callable[..., list[str]] | None = None) -> None:
+                 wrap: Callable[..., list[str]] | None = None,
+                 progress: Callable[[str], None] | None = None) -> None:
         cmd = [sys.executable, "-m", "sim", "--config", str(config), "--listen", endpoint,
                "--speed", speed, *(["--lockstep"] if lockstep else []),
                *([] if signing else ["--insecure"]), *extra]
@@ -74,12 +81,19 @@ class SimProcess:
         threading.Thread(target=self._pump, args=(self._proc.stdout, True), daemon=True).start()
         threading.Thread(target=self._pump, args=(self._proc.stderr, False),
                          daemon=True).start()
-        deadline = time.monotonic() + ready_timeout
+        start = time.monotonic()
+        deadline = start + ready_timeout
+        next_note = start + _FIRST_NOTE_S
         while True:
             try:
                 line = self._lines.get(timeout=0.1)
             except queue.Empty:
                 line = ""
+            now = time.monotonic()
+            if progress is not None and now >= next_note and not line.startswith("sim ready"):
+                progress(f"the simulator is still starting ({now - start:.0f} s): its first "
+                         f"start compiles its kernels, up to a minute; later starts load them")
+                next_note = now + _NOTE_PERIOD_S
             if line.startswith("sim ready"):
                 self.ready_line = line.strip()
                 return
