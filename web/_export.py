@@ -36,8 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from gcs.app import free_tcp_port
-from gcs.flightlog import FlightLog
-from gcs.flightlog._figstyle import PHASE_SHADES
+from gcs.flightlog import PHASE_SHADES, FlightLog
 from gcs.loop import Phase
 from web._history import History
 from web._plots import _COLORS, MAX_SERIES

@@ -23,6 +23,7 @@ Modules:
     ``_recorder``  Flight recorder: every MAVLink frame in and out, plus the GCS's own
                    internals, as a .tlog.
     ``_report``    ``gcs report``: figures and a summary of a recorded flight.
+    ``_shades``    The phases' colours on a time axis (report figures, exported replay).
     ``_scan``      One compiled pass over a .tlog's bytes: where each checked MAVLink frame
                    is.
 """
@@ -33,8 +34,10 @@ from gcs.flightlog._metrics import FlightMetrics
 from gcs.flightlog._reader import LogError, TlogIndex
 from gcs.flightlog._recorder import TlogRecorder
 from gcs.flightlog._report import write_report
+from gcs.flightlog._shades import PHASE_SHADES
 
 __all__ = [
+    "PHASE_SHADES",
     "EventLine",
     "FlightLog",
     "FlightMetrics",

@@ -23,7 +23,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from PIL import Image
 
-from gcs.loop import Phase
+from gcs.flightlog._shades import PHASE_SHADES
 
 __all__ = ["DPI", "FORMATS", "LIMIT_IN_VIEW", "PHASE_SHADES", "PNG_COLOURS", "axis_styles",
            "edge_colours", "legend_outside", "mark_limit", "phase_key", "save_figure",
@@ -49,10 +49,6 @@ _HEADROOM = 1.35
 """Axes kept to the data end this far past its peak (from zero; twice that span about
 zero for a signed quantity, which gets an arrow at each edge), so the arrow marking a
 limit off the scale sits in a band no data reaches."""
-
-PHASE_SHADES = {Phase.LIFTING.text: "#fde9b8", Phase.FORMATION.text: "#d5ecd4",
-                Phase.SETTING_DOWN.text: "#d6e4f5", Phase.ABORTING.text: "#f8cfcf"}
-"""Background of the time plots during the phases that carry the payload (and abort)."""
 
 _TAB10 = plt.get_cmap("tab10")
 

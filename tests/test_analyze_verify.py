@@ -1,0 +1,185 @@
+"""``gcs analyze --verify``: the team flown in the lockstep simulator, once per seed in
+parallel processes, measured from the simulator's truth against the analysis.
+
+Real parts: ``gcs analyze`` in a subprocess starts its flights in worker processes,
+each a real ``python -m sim`` behind zenoh and a GCS recording a .tlog. The
+comparison itself is a plain function, checked here with made-up numbers too.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from gcs.app import (
+    FIGURES,
+    FlightFigures,
+    VerifyResult,
+    compare,
+    format_verify,
+    parse_seeds,
+    rope_loads,
+)
+from gcs.common import ConfigError
+from tests.conftest import SHORT, SQUARE, run_gcs
+
+_ROW = re.compile(r"^  (?P<label>.+?)\s{2,}(?P<predicted>[-\d.]+)( \S+)?\s+"
+                  r"(?P<measured>[-\d.]+)( \S+)? \((?P<seed>\d+)\)\s+(?P<margin>[-+\d.]+)"
+                  r"( \S+)?\s+(?P<verdict>OK|EXCEEDED)$")
+
+
+def _rows(stdout: str) -> dict[str, dict[str, str]]:
+    out = {}
+    for line in stdout.splitlines():
+        m = _ROW.match(line)
+        if m:
+            out[m["label"]] = m.groupdict()
+    return out
+
+
+def _team(tmp_path: Path, **changes: dict[str, float]) -> Path:
+    """The paper's square with some sections changed, in ``tmp_path``."""
+    raw = yaml.safe_load(Path(SQUARE).read_text())
+    raw["airframe"] = str(Path("configs/airframes/bebop2.yaml").resolve())
+    for section, values in changes.items():
+        raw[section].update(values)
+    path = tmp_path / "team.yaml"
+    path.write_text(yaml.safe_dump(raw))
+    return path
+
+
+def test_the_square_is_flown_on_two_seeds_and_held_to_its_analysis() -> None:
+    out = run_gcs("analyze", SQUARE, "--verify", "--scenario", SHORT, "--seeds", "1-2",
+                  "--jobs", "2")
+    assert out.returncode in (0, 1), out.stderr
+    rows = _rows(out.stdout)
+    assert list(rows) == [f.label for f in FIGURES], out.stdout
+    analysis = json.loads(run_gcs("analyze", SQUARE, "--json").stdout)
+    load = analysis["static_load"]
+    predicted = {label: float(r["predicted"]) for label, r in rows.items()}
+    assert predicted[FIGURES[0].label] == pytest.approx(load["design_share"], abs=5e-4)
+    assert predicted[FIGURES[1].label] == pytest.approx(load["worst_share"], abs=5e-4)
+    assert predicted["tilt <= bank limit"] == pytest.approx(analysis["bank_limit_rad"],
+                                                             abs=5e-4)
+    assert predicted["distance error <= safe deformation"] == pytest.approx(
+        analysis["safe_deformation"]["margin_m"], abs=5e-4)
+    for r in rows.values():  # each row's margin is its bound less the worst of both seeds
+        assert float(r["margin"]) == pytest.approx(
+            float(r["predicted"]) - float(r["measured"]), abs=2e-3)
+        assert r["verdict"] == ("OK" if float(r["margin"]) >= 0 else "EXCEEDED")
+        assert r["seed"] in ("1", "2")
+    # the payload was carried (the paper's square hangs a quarter of it on each rope, a
+    # little more while it swings) and no vehicle came near the analysis' load bounds
+    share = float(rows[FIGURES[0].label]["measured"])
+    assert 0.25 <= share < 0.333
+    for label in (FIGURES[0].label, FIGURES[1].label, FIGURES[3].label,
+                  "tilt <= bank limit"):
+        assert rows[label]["verdict"] == "OK", out.stdout
+    exceeded = [label for label, r in rows.items() if r["verdict"] == "EXCEEDED"]
+    assert out.returncode == (1 if exceeded else 0), out.stdout
+    assert ("result: OK" in out.stdout) == (not exceeded)
+    assert "seed 1 completed" in out.stderr and "seed 2 completed" in out.stderr
+    assert "2 at a time" in out.stdout
+
+
+def test_a_flight_beyond_a_tiny_safe_deformation_fails_naming_the_figure(
+        tmp_path: Path) -> None:
+    """A square whose acceleration limit leaves it 2 cm of safe deformation passes the
+    analysis, and its flight, pulled 0.2 m in at lift-off, exceeds it."""
+    team = _team(tmp_path, limits={"accel_norm": 2.729},
+                 analysis={"design_rope_angle_deg": 40.0})
+    assert run_gcs("analyze", str(team)).returncode == 0
+    out = run_gcs("analyze", str(team), "--verify", "--scenario", SHORT, "--seeds", "3",
+                  "--jobs", "1")
+    assert out.returncode == 1, out.stdout + out.stderr
+    row = _rows(out.stdout)["distance error <= safe deformation"]
+    assert float(row["predicted"]) == pytest.approx(0.023, abs=1e-3)
+    assert row["verdict"] == "EXCEEDED" and row["seed"] == "3"
+    assert re.search(r"^EXCEEDED error_safe: measured 0\.\d+ \(seed 3\) > predicted 0\.023$",
+                     out.stdout, re.M), out.stdout
+    assert "result: FAILED" in out.stdout
+
+
+def test_a_team_the_analysis_refuses_is_not_flown(tmp_path: Path) -> None:
+    team = _team(tmp_path, payload={"mass": 2.0})
+    start = time.monotonic()
+    out = run_gcs("analyze", str(team), "--verify", "--json")
+    assert out.returncode == 1
+    assert time.monotonic() - start < 20.0
+    assert json.loads(out.stdout)["violations"]  # the analysis, as without --verify
+    assert "flying" not in out.stderr
+
+
+@pytest.mark.parametrize("args", [("--seeds", "4-1"), ("--seeds", "x"), ("--jobs", "0")])
+def test_bad_verify_options_are_one_line(args: tuple[str, str]) -> None:
+    out = run_gcs("analyze", SQUARE, "--verify", *args)
+    assert out.returncode == 2
+    assert len(out.stderr.strip().splitlines()) == 1 and args[0] in out.stderr
+
+
+def test_seeds_are_ranges_and_lists() -> None:
+    assert parse_seeds("1-4") == (1, 2, 3, 4)
+    assert parse_seeds("7") == (7,)
+    assert parse_seeds("1,3,9-10,3") == (1, 3, 9, 10)
+    with pytest.raises(ConfigError, match="--seeds"):
+        parse_seeds("-1")
+
+
+def _flight(seed: int, **values: float | None) -> FlightFigures:
+    return FlightFigures(seed=seed, completed=True, error=None, wall_s=1.0, **values)
+
+
+_MEASURED = {"share": 0.29, "tension": 1.45, "pull": 0.95, "tilt": 0.19, "span": 1.55,
+             "distance_error": 0.12}
+
+
+def _predicted(**changes: float) -> dict[str, float]:
+    return {"share_design": 1 / 3, "share_worst": 0.52, "tension_design": 1.69,
+            "tension_worst": 2.59, "pull_safe": 1.32, "tilt_bank": 0.349, "span_safe": 1.587,
+            "error_safe": 0.173, "error_eq_max": 1.0, **changes}
+
+
+def test_the_comparison_takes_the_worst_seed_and_flags_what_exceeds() -> None:
+    flights = [_flight(1, **_MEASURED), _flight(2, **(_MEASURED | {"distance_error": 0.15}))]
+    rows = {r.figure.key: r for r in compare(_predicted(error_safe=0.05), flights)}
+    assert [r.figure.key for r in rows.values() if not r.ok] == ["error_safe"]
+    bad = rows["error_safe"]
+    assert (bad.measured, bad.seed) == (0.15, 2) and bad.margin == pytest.approx(-0.1)
+    assert rows["error_eq_max"].ok and rows["error_eq_max"].margin == pytest.approx(0.85)
+    result = VerifyResult("square", "short_flight", (1, 2), 2, 10.0, tuple(flights),
+                          tuple(rows.values()))
+    assert not result.ok and result.to_json()["exceeded"] == ["error_safe"]
+    text = format_verify(result)
+    assert "EXCEEDED error_safe: measured 0.150 (seed 2) > predicted 0.050" in text
+    assert text.endswith("result: FAILED (1 figure(s) exceeded, 0 flight(s) incomplete)")
+    ok = VerifyResult("square", "short_flight", (1, 2), 2, 10.0, tuple(flights),
+                      tuple(compare(_predicted(), flights)))
+    assert ok.ok and format_verify(ok).endswith("result: OK (2 flights within the analysis)")
+
+
+def test_an_incomplete_flight_or_an_unmeasured_figure_fails() -> None:
+    lost = FlightFigures(seed=5, completed=False, error="ScenarioError: timed out",
+                         wall_s=3.0, **_MEASURED)
+    result = VerifyResult("square", "s", (5,), 1, 3.0, (lost,),
+                          tuple(compare(_predicted(), [lost])))
+    assert not result.exceeded and not result.ok
+    assert "FLIGHT seed 5 did not complete: ScenarioError: timed out" in format_verify(result)
+    grounded = _flight(1, **(_MEASURED | {"share": None}))  # the payload never rose
+    row = compare(_predicted(), [grounded])[0]
+    assert row.measured is None and not row.ok
+
+
+def test_rope_loads_split_a_pull_into_its_vertical_and_horizontal_parts() -> None:
+    payload = np.array([[1.0, 0.0, 1.0]])
+    vehicles = np.array([[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]])
+    vertical, horizontal, reach = rope_loads(payload, vehicles, np.array([[math.sqrt(2), 2.0]]))
+    np.testing.assert_allclose(vertical, [[1.0, 2.0]])
+    np.testing.assert_allclose(horizontal, [[1.0, 0.0]], atol=1e-12)
+    np.testing.assert_allclose(reach, [[1.0, 0.0]])
