@@ -13,7 +13,8 @@ key                                                dir    payload
 ``fleet/<f>/clock``                                out    sim time (:mod:`gcs.wire._clockwire`)
 ``fleet/<f>/clock/ack``                            in     lockstep ack (:mod:`gcs.wire._clockwire`)
 ``fleet/<f>/sim/truth``                            out    :class:`gcs.wire.SimTruth` JSON
-``fleet/<f>/sim/control``                          in     :mod:`sim._faults` JSON
+``fleet/<f>/sim/control``                          in     :mod:`sim._faults` JSON, put or
+                                                          queried (answered once queued)
 =================================================  =====  ======================================
 
 Receivers run on zenoh's threads: vehicle frames go to the host's
@@ -128,6 +129,7 @@ class HostFabric:
         self._session = open_session(settings)
         self._links: dict[int, _VehicleLink] = {}
         self._subscribers: list[zenoh.Subscriber] = []
+        self._queryables: list[zenoh.Queryable] = []
         try:
             # The clock paces the GCS loop: at real-time priority it has a queue of its
             # own, so a backlog of telemetry (which blocks) cannot crowd it out; on a
@@ -143,7 +145,9 @@ class HostFabric:
             self._subscribers.append(self._session.declare_subscriber(
                 keys.clock_ack(fleet), lambda s: self._on_ack(s, inbox)))
             self._subscribers.append(self._session.declare_subscriber(
-                keys.sim(fleet, CONTROL_TOPIC), lambda s: self._on_control(s, inbox)))
+                keys.sim(fleet, CONTROL_TOPIC), lambda s: self._take_control(s.payload, inbox)))
+            self._queryables.append(self._session.declare_queryable(
+                keys.sim(fleet, CONTROL_TOPIC), lambda q: self._on_control_query(q, inbox)))
             for index, sysid in enumerate(sysids):
                 self._links[index] = _VehicleLink(self._session, fleet, sysid, index, on_frame,
                                                   self.refusals)
@@ -208,6 +212,10 @@ class HostFabric:
                 with contextlib.suppress(zenoh.ZError):
                     sub.undeclare()
             self._subscribers.clear()
+            for queryable in self._queryables:
+                with contextlib.suppress(zenoh.ZError):
+                    queryable.undeclare()
+            self._queryables.clear()
         finally:
             with contextlib.suppress(zenoh.ZError):
                 self._session.close()
@@ -223,14 +231,28 @@ class HostFabric:
         except ValueError as exc:  # SealError is one
             self.refusals.refuse("clock ack", str(exc))
 
-    def _on_control(self, sample: zenoh.Sample, inbox: Inbox) -> None:
+    def _take_control(self, payload: zenoh.ZBytes | None, inbox: Inbox) -> str:
+        """Queue a control message for the loop (which parses it and refuses the rest:
+        :mod:`sim._faults`); returns ``queued`` or why it was refused here."""
         limit = CONTROL_MAX_BYTES + self._extra
-        data = bounded_payload(sample, limit)
-        if data is None:  # parsed by the loop, which refuses the rest (sim._faults)
-            self.refusals.refuse("control message", f"{len(sample.payload)} bytes, more than "
-                                                    f"{limit}")
-            return
+        if payload is None or len(payload) > limit:
+            why = "no payload" if payload is None else f"{len(payload)} bytes, more than {limit}"
+            self.refusals.refuse("control message", why)
+            return f"refused: {why}"
         try:
-            inbox.put(ControlMessage(self._open_control.open(data)))
+            inbox.put(ControlMessage(self._open_control.open(payload.to_bytes())))
         except SealError as exc:
             self.refusals.refuse("control message", str(exc))
+            return f"refused: {exc}"
+        return "queued"
+
+    def _on_control_query(self, query: zenoh.Query, inbox: Inbox) -> None:
+        """A control message sent as a query: queued as a put's is, then answered.
+
+        Why: each subscriber has a thread of its own, so a put can reach the inbox
+        after a clock ack sent later. A lockstep GCS that waits for this answer
+        before acking its tick knows the message is queued first: it acts at the
+        sim time the sim stands at, the same on every run.
+        """
+        answer = self._take_control(query.payload, inbox)
+        query.reply(query.key_expr, answer.encode())

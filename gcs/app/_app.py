@@ -260,6 +260,8 @@ class GcsApp:
         self.runtime.note(level, text)
 
     def _on_clock(self, sample: zenoh.Sample) -> None:
+        if getattr(self, "runtime", None) is None:
+            return  # still being built (no links yet): the sim repeats its clock anyway
         data = bounded_payload(sample, CLOCK_MAX_BYTES + SEAL_OVERHEAD)
         try:
             if data is None:

@@ -19,8 +19,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-import zenoh
-
 from gcs.app._app import GcsApp, _seal_key
 from gcs.app._scenario import Scenario, ScenarioError, Step, play, play_step
 from gcs.app._simprocess import SimProcess, free_tcp_port
@@ -30,7 +28,10 @@ from gcs.loop import GatedClock, RuntimeSnapshot
 from gcs.transport import ZenohSettings
 from gcs.wire import Sealer, SimTruth, keys
 
-__all__ = ["FlightResult", "HeadlessFlight", "fly"]
+__all__ = ["CONTROL_ANSWER_S", "FlightResult", "HeadlessFlight", "fly"]
+
+CONTROL_ANSWER_S = 10.0
+"""Longest wall time the simulator may take to answer a control message, s."""
 
 
 @dataclass
@@ -76,7 +77,6 @@ class HeadlessFlight:
                  lockstep: bool = True, say: Callable[[str], None] | None = None,
                  ready_timeout: float = 60.0) -> None:
         self.team = team
-        self.record = record
         line = signing_line(team.config.gcs, Path(team.source).parent)  # the key, before the sim
         if say is not None:
             say(line)
@@ -110,7 +110,7 @@ class HeadlessFlight:
         self.app.add_listener(self._on_tick)
         self.clock = GatedClock(self.app.clock, self.app.gate)
         """The clock steps wait on: in lockstep they park at ticks."""
-        self._control: tuple[zenoh.Publisher, Sealer] | None = None
+        self._sealer: Sealer | None = None  # seals control messages (made at the first)
         self._closed = False
 
     def _on_tick(self, snap: RuntimeSnapshot, _truth: SimTruth | None) -> None:
@@ -133,22 +133,28 @@ class HeadlessFlight:
         """Play one step (:func:`gcs.app.play_step`); blocks until it is done."""
         play_step(step, self.app.loop, self.clock, where=where)
 
-    def control(self, payload: bytes) -> None:
-        """Publish ``payload``, sealed with the team key, on the simulator's control key (a
-        fault injected on purpose: ``sim._faults``).
+    def control(self, payload: bytes) -> str:
+        """Send ``payload``, sealed with the team key, on the simulator's control key (a
+        fault injected on purpose: ``sim._faults``); returns the simulator's answer
+        (``queued``, or why it refused it), or ``sent`` to a simulator joined.
 
-        Sent by the playing thread in lockstep, it acts at this tick's sim time on every
-        run: it travels as the tick's ack does (same session, priority, express), so
-        it reaches the simulator before the ack that lets it run on.
+        To the simulator started here it goes as a query, answered once the message is
+        queued: sent by the playing thread in lockstep, it is then ahead of the tick's
+        ack, so it acts at this tick's sim time on every run (a put could be overtaken
+        by the ack: zenoh runs each subscriber on a thread of its own).
         """
-        if self._control is None:
-            topic = keys.sim(self.app.fleet, "control")
-            self._control = (self.app.session.declare_publisher(
-                topic, congestion_control=zenoh.CongestionControl.BLOCK,
-                priority=zenoh.Priority.REAL_TIME, express=True),
-                Sealer(_seal_key(self.team), topic))
-        publisher, sealer = self._control
-        publisher.put(sealer.seal(payload))
+        topic = keys.sim(self.app.fleet, "control")
+        if self._sealer is None:
+            self._sealer = Sealer(_seal_key(self.team), topic)
+        sealed = self._sealer.seal(payload)
+        if self.sim is None:
+            self.app.session.put(topic, sealed)
+            return "sent"
+        for reply in self.app.session.get(topic, payload=sealed, timeout=CONTROL_ANSWER_S):
+            if reply.ok is not None:
+                return reply.ok.payload.to_bytes().decode(errors="replace")
+        raise RuntimeError(f"the simulator did not answer a control message within "
+                           f"{CONTROL_ANSWER_S:g} s")
 
     def stop_playing(self) -> None:
         """Leave the lockstep: the loop goes on without waiting for the playing thread."""

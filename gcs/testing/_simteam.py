@@ -318,7 +318,9 @@ class SimTeam:
 
     def _fault(self, command: dict[str, object]) -> None:
         self._flying()
-        self._flight.control(json.dumps(command).encode())
+        answer = self._flight.control(json.dumps(command).encode())
+        if answer.startswith("refused"):
+            raise FlightError(f"{command['action']}: the simulator {answer}")
 
     def _vehicle(self, sysid: int) -> int:
         ids = self.team.formation.ids
