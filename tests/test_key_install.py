@@ -32,6 +32,9 @@ class Autopilot(threading.Thread):
         self.conn = mavutil.mavlink_connection(f"udpout:127.0.0.1:{gcs_port}",
                                                source_system=VEHICLE, source_component=1)
         self.conn.mav = v20.MAVLink(self.conn, srcSystem=VEHICLE, srcComponent=1)
+        # once signing, it drops the GCS's unsigned frames (pymavlink raises on them unless
+        # parsing robustly, which ended this thread in a full test run)
+        self.conn.mav.robust_parsing = True
         self.takes_keys = takes_keys
         self.key: bytes | None = None
         self._quit = threading.Event()
