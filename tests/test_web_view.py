@@ -187,13 +187,17 @@ def test_an_event_storm_is_one_line_with_its_count(flight: GcsApp, page_ui: WebU
                 break_vehicle(flight, "restore", vid)
             sim_sleep(flight, 2.0)
         conditions = page.locator("[data-gcs=conditions]")
-        wait_for(lambda: "×12" in conditions.inner_text(), 10, "the storm's count",
+        # as many as the GCS said (12 here; fewer when a loaded machine let the vehicles
+        # drop to HOLD during a cut, which says so in a line of its own)
+        said = sum(1 for e in flight.loop.events() if "no fresh telemetry" in e.text)
+        assert said >= 4, said
+        wait_for(lambda: f"×{said}" in conditions.inner_text(), 10, "the storm's count",
                  lambda: conditions.inner_text())
         stale = [line for line in conditions.inner_text().splitlines()
                  if "no fresh telemetry" in line]
         print(f"the storm on the page: {stale}")
         assert len(stale) == 1 and STALE_LINE.search(stale[0]), stale
-        assert int(STALE_LINE.search(stale[0]).group(1)) == 12  # type: ignore[union-attr]
+        assert int(STALE_LINE.search(stale[0]).group(1)) == said  # type: ignore[union-attr]
 
         log = page.locator("[data-gcs=event-log] [data-level=info]")
         assert log.count() > 0 and log.first.is_visible()
