@@ -45,7 +45,7 @@ def _verify(args: argparse.Namespace, team: Team, analysis: Analysis) -> int:
     seeds = parse_seeds(args.seeds)
     if args.jobs is not None and args.jobs < 1:
         raise ConfigError("--jobs", "", f"must be at least 1, got {args.jobs}")
-    for warning in check_scenario(load_scenario(scenario), team, scenario):
+    for warning in check_scenario(load_scenario(scenario), team, scenario, analysis=analysis):
         print(f"gcs analyze: warning: {warning}", file=sys.stderr)
     result = verify(team, scenario, analysis, seeds=seeds, jobs=args.jobs,
                     progress=lambda line: print(f"gcs analyze --verify: {line}",
@@ -63,12 +63,14 @@ def _cmd_sim(args: argparse.Namespace) -> int:
     return 0  # not reached
 
 
-def _analysis_refuses(team: Team, command: str, *, override: bool) -> bool:
-    """True (and every violation on stderr) when ``gcs analyze`` refuses ``team`` and the
-    user did not override it: nothing is started for a team the certificate refuses."""
+def _analysis_refuses(team: Team, command: str, *, override: bool,
+                      result: Analysis | None = None) -> bool:
+    """True (and every violation on stderr) when ``gcs analyze`` refuses ``team`` (its
+    ``result``, computed if not given) and the user did not override it: nothing is
+    started for a team the certificate refuses."""
     from gcs.analysis import analyze
 
-    result = analyze(team)
+    result = result or analyze(team)
     if result.ok or override:
         return False
     print(f"gcs {command}: error: {team.source}: gcs analyze refuses this team "
@@ -124,6 +126,7 @@ def _cmd_fly(args: argparse.Namespace) -> int:
     import json
     from pathlib import Path
 
+    from gcs.analysis import analyze
     from gcs.app import check_scenario, fly, load_scenario
     from gcs.config import load_team
 
@@ -131,9 +134,10 @@ def _cmd_fly(args: argparse.Namespace) -> int:
     if args.insecure:
         team = team.without_signing()
     scenario = load_scenario(args.scenario)
-    if _analysis_refuses(team, "fly", override=args.override_analysis):
+    analysis = analyze(team)
+    if _analysis_refuses(team, "fly", override=args.override_analysis, result=analysis):
         return 1
-    for warning in check_scenario(scenario, team, args.scenario):
+    for warning in check_scenario(scenario, team, args.scenario, analysis=analysis):
         print(f"gcs fly: warning: {warning}", file=sys.stderr)
     if args.speed != "max":
         try:

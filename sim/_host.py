@@ -36,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gcs.config import Team, ensure_team_key, link_key, team_key_path
+from gcs.config import GcsLinkConfig, Team, link_key, seal_key
 from gcs.wire import SigningKey, SimTruth, vec3
 from sim._config import WorldConfig
 from sim._fabric import HostFabric
@@ -109,6 +109,7 @@ class SimHost:
         self._inbox = Inbox()
         self._refusals = Refusals()
         self._signature_refused = [0] * len(self._sysids)
+        self._next_signature_check = 0.0
         self._status = [VehicleStatus.LIVE] * len(self._sysids)
         self._cut_until: dict[int, float] = {}  # vehicle index -> sim time its timed cut ends
         self._wind_mean = self._world.params.wind_mean.copy()  # the world config's
@@ -133,7 +134,8 @@ class SimHost:
                                   fleet=options.fleet or cfg.gcs.fleet, sysids=self._sysids,
                                   inbox=self._inbox, on_frame=self._receive,
                                   announce_sent=options.lockstep, refusals=self._refusals,
-                                  seal_key=_seal_key(team, signing=options.signing))
+                                  seal_key=seal_key(_signing_settings(team, options.signing),
+                                                    Path(team.source).parent))
         try:
             if options.udp:
                 self._udp = UdpPorts(len(self._sysids), base_port=options.udp_base_port,
@@ -274,6 +276,8 @@ class SimHost:
             if self._next_truth <= t:
                 self._next_truth = t + TRUTH_PERIOD_S
             self._fabric.publish_truth(self._truth())
+        if t >= self._next_signature_check - _EPS:  # once a second: not on every chunk
+            self._next_signature_check = t + 1.0
             self._note_signature_refusals()
         self._fabric.publish_clock(t)  # last: a lockstep sample counts what went before
 
@@ -398,21 +402,17 @@ _NEXT_STATUS = {
 }
 
 
-def _seal_key(team: Team, *, signing: bool) -> SigningKey | None:
-    """The team key that seals the clock, truth, acks and control (None: signing off)."""
+def _signing_settings(team: Team, signing: bool) -> GcsLinkConfig:
+    """The team file's signing settings, with signing off if ``--insecure`` says so."""
     settings = team.config.gcs
-    if not (signing and settings.signing):
-        return None
-    return ensure_team_key(team_key_path(settings, Path(team.source).parent))[0]
+    return settings if signing else dataclasses.replace(settings, signing=False)
 
 
 def _signing_keys(team: Team, *, signing: bool) -> dict[int, SigningKey]:
     """Each vehicle's signing key: the key file its link names, else the team key
     (every simulated vehicle is signed unless ``signing`` or the team file says not)."""
     base = Path(team.source).parent
-    settings = team.config.gcs
-    if not signing:
-        settings = dataclasses.replace(settings, signing=False)
+    settings = _signing_settings(team, signing)
     out: dict[int, SigningKey] = {}
     for link in team.config.vehicle_links():
         key = link_key(dataclasses.replace(link, profile="sim"), settings=settings,

@@ -34,13 +34,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as v20
 
 from gcs.config import LinkConfig, Team, TeamFrameConfig, load_team
 from gcs.link import Link, LinkManager
 from gcs.loop import Action, OperatorCommand, Phase, Runtime, WallClock
 from gcs.loop._runtime import Event
+from gcs.testing import mavlink2_connection
 from gcs.transport import MavutilTransport
 from gcs.wire import CopterMode, Px4AutoSubMode, Px4MainMode, SigningKey, SimMode
 from gcs.wire._modes import px4_custom_mode
@@ -90,13 +90,8 @@ class ScriptedAutopilot(threading.Thread):
         super().__init__(daemon=True, name=f"scripted-{kind}-{sysid}")
         self.kind = kind
         self.sysid = sysid
-        self.conn = mavutil.mavlink_connection(f"udpout:127.0.0.1:{gcs_port}",
-                                               source_system=sysid, source_component=1)
-        # Speak MAVLink 2 from the first frame, whatever mavutil's global dialect is.
-        self.conn.mav = v20.MAVLink(self.conn, srcSystem=sysid, srcComponent=1)
-        self.conn.mav.robust_parsing = True
-        self.conn.WIRE_PROTOCOL_VERSION = "2.0"
-        self.conn.first_byte = False
+        self.conn = mavlink2_connection(f"udpout:127.0.0.1:{gcs_port}", source_system=sysid,
+                                        source_component=1)
         if signing_key is not None:
             self.conn.setup_signing(signing_key.secret, sign_outgoing=True, link_id=7)
         self.script = {k: list(v) for k, v in (script or {}).items()}

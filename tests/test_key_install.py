@@ -7,10 +7,9 @@ import socket
 import threading
 
 import pytest
-from pymavlink import mavutil
-from pymavlink.dialects.v20 import common as v20
 
 from gcs.link import LinkError, install_signing_key
+from gcs.testing import mavlink2_connection
 from gcs.wire import SigningKey, mavlink
 
 KEY = SigningKey(bytes(range(3, 35)))
@@ -29,12 +28,10 @@ class Autopilot(threading.Thread):
 
     def __init__(self, gcs_port: int, *, takes_keys: bool) -> None:
         super().__init__(daemon=True)
-        self.conn = mavutil.mavlink_connection(f"udpout:127.0.0.1:{gcs_port}",
-                                               source_system=VEHICLE, source_component=1)
-        self.conn.mav = v20.MAVLink(self.conn, srcSystem=VEHICLE, srcComponent=1)
-        # once signing, it drops the GCS's unsigned frames (pymavlink raises on them unless
-        # parsing robustly, which ended this thread in a full test run)
-        self.conn.mav.robust_parsing = True
+        # once signing, it drops the GCS's unsigned frames (robust parsing: pymavlink raised
+        # on them otherwise, which ended this thread in a full test run)
+        self.conn = mavlink2_connection(f"udpout:127.0.0.1:{gcs_port}", source_system=VEHICLE,
+                                        source_component=1)
         self.takes_keys = takes_keys
         self.key: bytes | None = None
         self._quit = threading.Event()

@@ -22,7 +22,7 @@ import zenoh
 
 from gcs.analysis import analyze, safe_guidance
 from gcs.common import join_thread
-from gcs.config import Team, ensure_team_key, team_key_path
+from gcs.config import Team, seal_key
 from gcs.flightlog import TlogRecorder
 from gcs.link import Link, LinkManager, Presence, PresenceEvent
 from gcs.loop import (
@@ -46,7 +46,6 @@ from gcs.wire import (
     MavMessage,
     Sealer,
     SealError,
-    SigningKey,
     SimTruth,
     Unsealer,
     decode_clock,
@@ -137,15 +136,6 @@ default let them hold the loop back: tick jitter p99 10 ms, 3 ms with this
 (bench/gcs_tick.py). The sim host sets the same for its receive threads."""
 
 
-def _seal_key(team: Team) -> SigningKey | None:
-    """The team key that authenticates the simulator's clock and truth and our acks
-    (None with signing off); the simulator started for this team uses the same."""
-    settings = team.config.gcs
-    if not settings.signing:
-        return None
-    return ensure_team_key(team_key_path(settings, Path(team.source).parent))[0]
-
-
 class GcsApp:
     """Everything one GCS process runs for one team.
 
@@ -179,10 +169,10 @@ class GcsApp:
         self.clock_refused = 0
         """Clock samples refused by the guard: backwards, too far ahead (:class:`ClockGuard`)."""
         self._clock_guard = ClockGuard()
-        seal_key = _seal_key(team)
-        self._open_clock = Unsealer(seal_key, keys.clock(self.fleet))
-        self._open_truth = Unsealer(seal_key, keys.sim(self.fleet, "truth"))
-        self._seal_ack = Sealer(seal_key, keys.clock_ack(self.fleet))
+        key = seal_key(cfg.gcs, Path(team.source).parent)
+        self._open_clock = Unsealer(key, keys.clock(self.fleet))
+        self._open_truth = Unsealer(key, keys.sim(self.fleet, "truth"))
+        self._seal_ack = Sealer(key, keys.clock_ack(self.fleet))
         self._clock_noted: float | None = None  # wall time of the last event about them
         self.clock: Clock
         self._ack: zenoh.Publisher | None = None

@@ -19,10 +19,10 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from gcs.app._app import GcsApp, _seal_key
+from gcs.app._app import GcsApp
 from gcs.app._scenario import Scenario, ScenarioError, Step, play, play_step
 from gcs.app._simprocess import SimProcess, free_tcp_port
-from gcs.config import Team, signing_line
+from gcs.config import Team, seal_key, signing_line
 from gcs.flightlog import FlightMetrics
 from gcs.loop import GatedClock, RuntimeSnapshot
 from gcs.transport import ZenohSettings
@@ -145,7 +145,8 @@ class HeadlessFlight:
         """
         topic = keys.sim(self.app.fleet, "control")
         if self._sealer is None:
-            self._sealer = Sealer(_seal_key(self.team), topic)
+            key = seal_key(self.team.config.gcs, Path(self.team.source).parent)
+            self._sealer = Sealer(key, topic)
         sealed = self._sealer.seal(payload)
         if self.sim is None:
             self.app.session.put(topic, sealed)

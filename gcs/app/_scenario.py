@@ -27,7 +27,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from gcs.analysis import analyze, safe_guidance
+from gcs.analysis import Analysis, analyze, safe_guidance
 from gcs.common import ConfigError, FieldError, field, from_mapping, load_yaml
 from gcs.config import Team
 from gcs.loop import Action, Clock, Phase, Runtime
@@ -129,7 +129,8 @@ def load_scenario(path: str | Path) -> Scenario:
     return from_mapping(Scenario, raw, str(path))
 
 
-def check_scenario(scenario: Scenario, team: Team, source: str) -> list[str]:
+def check_scenario(scenario: Scenario, team: Team, source: str, *,
+                   analysis: Analysis | None = None) -> list[str]:
     """Refuse a scenario that asks ``team`` for what its config does not allow; returns
     warnings for what the flight will fly otherwise than asked.
 
@@ -141,7 +142,7 @@ def check_scenario(scenario: Scenario, team: Team, source: str) -> list[str]:
     there: :func:`gcs.analysis.safe_guidance`) is a warning naming the scale flown.
     """
     g, op = team.config.guidance, team.config.operator
-    safe_max = safe_guidance(team, analyze(team)).scale_max
+    safe_max = safe_guidance(team, analysis or analyze(team)).scale_max
     warnings: list[str] = []
     scale = 1.0
     for k, step in enumerate(scenario.steps):

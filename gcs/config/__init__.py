@@ -31,6 +31,7 @@ from gcs.config._team_key import (
     key_fingerprint,
     key_from_passphrase,
     link_key,
+    seal_key,
     signing_line,
     team_key_path,
 )
@@ -54,6 +55,7 @@ __all__ = [
     "key_from_passphrase",
     "link_key",
     "load_team",
+    "seal_key",
     "signing_line",
     "team_key_path",
 ]

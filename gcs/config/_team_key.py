@@ -34,6 +34,7 @@ __all__ = [
     "key_fingerprint",
     "key_from_passphrase",
     "link_key",
+    "seal_key",
     "signing_line",
     "team_key_path",
 ]
@@ -104,6 +105,14 @@ def key_fingerprint(key: SigningKey) -> str:
     return hashlib.sha256(key.secret).hexdigest()[:8]
 
 
+def seal_key(settings: GcsLinkConfig, base_dir: Path) -> SigningKey | None:
+    """The team key that seals the simulator's clock, truth, acks and control (and signs
+    its vehicles), or None with signing off: the GCS and the simulator ask here alike."""
+    if not settings.signing:
+        return None
+    return ensure_team_key(team_key_path(settings, base_dir))[0]
+
+
 def signing_line(settings: GcsLinkConfig, base_dir: Path) -> str:
     """One line for the console on how the team is signed, making the key if needed
     (before a simulator is started, so that the two never race to make it)."""
@@ -123,6 +132,6 @@ def link_key(link: LinkConfig, *, settings: GcsLinkConfig,
         path = link.signing_key_path(base_dir)
         assert path is not None
         return load_signing_key(path)
-    if link.signing_key == TEAM_KEY or (settings.signing and link.profile == "sim"):
+    if link.signing_key == TEAM_KEY:
         return ensure_team_key(team_key_path(settings, base_dir))[0]
-    return None
+    return seal_key(settings, base_dir) if link.profile == "sim" else None

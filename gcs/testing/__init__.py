@@ -10,7 +10,7 @@ Modules:
 
     ``_frames``   MAVLink 2 frames around any payload, and where each field of a message
                   sits in it.
-    ``_mavutil``  The team key, and a pymavlink connection signed with it.
+    ``_mavutil``  The team key, and pymavlink connections in MAVLink 2 (signed with it).
     ``_metrics``  The figures of a flight, as ``gcs fly --json`` prints them, as attributes
                   to assert on.
     ``_netns``    A second host on this machine: a network namespace joined to this one by a
@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from gcs.testing._frames import field_layout, raw_frame
-    from gcs.testing._mavutil import signed_connection, team_key
+    from gcs.testing._mavutil import mavlink2_connection, signed_connection, team_key
     from gcs.testing._metrics import Metrics
     from gcs.testing._netns import Host, NetnsUnavailableError
     from gcs.testing._relay import RTO_S, LossyRelay
@@ -49,6 +49,7 @@ __all__ = [
     "SimTeam",
     "TeamState",
     "field_layout",
+    "mavlink2_connection",
     "raw_frame",
     "signed_connection",
     "team_key",
@@ -56,7 +57,8 @@ __all__ = [
 
 _MODULE = {
     "field_layout": "_frames", "raw_frame": "_frames",
-    "signed_connection": "_mavutil", "team_key": "_mavutil",
+    "mavlink2_connection": "_mavutil", "signed_connection": "_mavutil",
+    "team_key": "_mavutil",
     "Metrics": "_metrics",
     "Host": "_netns", "NetnsUnavailableError": "_netns",
     "RTO_S": "_relay", "LossyRelay": "_relay",

@@ -16,7 +16,7 @@ from pymavlink.dialects.v20 import common as v20
 from gcs.config import default_team_key_path, ensure_team_key
 from gcs.wire import SigningKey, signing_timestamp
 
-__all__ = ["signed_connection", "team_key"]
+__all__ = ["mavlink2_connection", "signed_connection", "team_key"]
 
 
 def team_key() -> SigningKey:
@@ -26,6 +26,24 @@ def team_key() -> SigningKey:
     return ensure_team_key(default_team_key_path())[0]
 
 
+def mavlink2_connection(device: str, *, source_system: int, source_component: int,
+                        **kwargs: Any) -> Any:
+    """``mavutil.mavlink_connection(device, ...)`` that speaks MAVLink 2 from its first frame
+    and parses robustly (frames it cannot check are dropped, not raised).
+
+    Why: mavutil speaks MAVLink 1, which cannot be signed, until it has heard MAVLink 2
+    (unless its process-wide dialect was switched already by an earlier connection), and
+    it raises on a frame whose signature it refuses, which ends a reading thread.
+    """
+    conn = mavutil.mavlink_connection(device, source_system=source_system,
+                                      source_component=source_component, **kwargs)
+    conn.mav = v20.MAVLink(conn, srcSystem=source_system, srcComponent=source_component)
+    conn.mav.robust_parsing = True
+    conn.WIRE_PROTOCOL_VERSION = "2.0"
+    conn.first_byte = False
+    return conn
+
+
 def signed_connection(device: str, *, key: SigningKey | None = None, source_system: int = 245,
                       source_component: int = 190, link_id: int = 7,
                       **kwargs: Any) -> Any:
@@ -33,14 +51,8 @@ def signed_connection(device: str, *, key: SigningKey | None = None, source_syst
     ``key`` (default: this user's team key) and drops unsigned frames it receives."""
     if key is None:
         key = team_key()
-    conn = mavutil.mavlink_connection(device, source_system=source_system,
-                                      source_component=source_component, **kwargs)
-    # MAVLink 2 from the first frame (signatures need it): mavutil speaks MAVLink 1 until it
-    # has heard MAVLink 2, unless its process-wide dialect was switched already.
-    conn.mav = v20.MAVLink(conn, srcSystem=source_system, srcComponent=source_component)
-    conn.mav.robust_parsing = True
-    conn.WIRE_PROTOCOL_VERSION = "2.0"
-    conn.first_byte = False
+    conn = mavlink2_connection(device, source_system=source_system,
+                               source_component=source_component, **kwargs)
     conn.setup_signing(key.secret, sign_outgoing=True, link_id=link_id,
                        initial_timestamp=signing_timestamp())
     return conn
