@@ -12,7 +12,8 @@ The loop, per chunk of :data:`CHUNK_S` of sim time:
    period behind; while waiting, inbound events are handled as they arrive
    (a setpoint's echo has already left from the receive thread, see
    :meth:`vehicles.endpoint.VehicleEndpoint.take`);
-2. handle every event that arrived (frames, acks, control messages);
+2. handle every event that arrived (frames, acks), then the control messages
+   that came meanwhile (:meth:`SimHost._apply_controls`);
 3. step world and autopilots in lockstep (:meth:`sim.World.run`);
 4. let every endpoint send what is due, publish the clock, and the ground
    truth every :data:`TRUTH_PERIOD_S`.
@@ -114,6 +115,7 @@ class SimHost:
         self._cut_until: dict[int, float] = {}  # vehicle index -> sim time its timed cut ends
         self._wind_mean = self._world.params.wind_mean.copy()  # the world config's
         self._gusts: list[tuple[float, np.ndarray]] = []  # (sim time it ends, wind it adds)
+        self._controls: list[bytes] = []  # control messages to act on at the next chunk
         self._pacer = Pacer(options.speed)
         self._due: float | None = None  # wall time the chunk being stepped was due (paced)
         # lockstep: nothing past the first chunk runs before a GCS acks its first tick, so
@@ -215,6 +217,7 @@ class SimHost:
             if self._stopping:
                 break
             self._drain()
+            self._apply_controls()
             self._end_timed_faults()
             self._world.run(self._autopilot, CHUNK_S)
             self._after_chunk()
@@ -321,10 +324,24 @@ class SimHost:
             else:
                 self._acked = max(self._acked, event.t)
         elif isinstance(event, ControlMessage):
-            self._control(event.data)
+            self._controls.append(event.data)
         else:
             self._stopping = True
         return True
+
+    def _apply_controls(self) -> None:
+        """Act on the control messages that came since the last chunk, at its boundary.
+
+        Why not as they arrive: a control message and a tick's setpoints travel on
+        different keys, so a cut acted on at once was now ahead of the cut vehicle's
+        setpoint of that tick (dropped, that vehicle flew the tick before's), now
+        behind it, as the threads happened to run, and two lockstep runs of one seed
+        differed from there. At the chunk boundary every frame the GCS sent before
+        its ack is in (it acks once the sim echoed the tick's setpoints).
+        """
+        controls, self._controls = self._controls, []
+        for data in controls:
+            self._control(data)
 
     def _control(self, data: bytes) -> None:
         try:

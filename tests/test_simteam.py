@@ -115,9 +115,6 @@ def test_the_metrics_are_those_of_gcs_fly(flown: Flown) -> None:
     assert set(m.to_dict()) - set(m.flight()) == {"real_time_factor"}
 
 
-@pytest.mark.xfail(reason="open: two lockstep flights of one seed differ from the hover on "
-                          "(about 1e-3 m in distance errors) in the current tree; found at the "
-                          "end of the stop, cause not found yet (issue 23)", strict=False)
 def test_the_same_seed_flies_the_same_flight_to_the_last_digit_under_load(
         flown: Flown) -> None:
     again = fly_with_faults(seed=3, hog=True)

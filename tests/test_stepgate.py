@@ -98,10 +98,27 @@ def test_close_releases_parked_participants_and_gating_stops() -> None:
     gate = StepGate(enabled=True)
     with ThreadPoolExecutor(1) as pool:
         parked = gate.submit(pool, lambda: (gate.pause(), gate.pause()))
-        time.sleep(0.05)
+        assert gate.window()  # it runs in the window, up to its first pause
         gate.close()
         assert parked.result(timeout=2) == (True, False)
         assert gate.window() is True
+
+
+def test_work_submitted_between_windows_starts_only_in_the_next_window() -> None:
+    # as the loop's tick submits a recovery's resume: started at once, it raced the rest
+    # of the tick (its setpoint before or after the tick's), and runs of a seed differed
+    gate = StepGate(enabled=True)
+    started = threading.Event()
+    with ThreadPoolExecutor(2) as pool:
+        done = gate.submit(pool, started.set)
+        assert not started.wait(0.2)
+        assert gate.window()
+        assert started.is_set()  # in the window, which waited for it
+        done.result(timeout=2)
+        late = gate.submit(pool, started.clear)  # parked when the gate closes: runs then
+        gate.close()
+        late.result(timeout=2)
+    assert not started.is_set()
 
 
 def test_gated_clock_wakes_a_participant_at_the_first_tick_at_or_after_the_time() -> None:
@@ -120,3 +137,12 @@ def test_gated_clock_wakes_a_participant_at_the_first_tick_at_or_after_the_time(
             gate.window()
         done.result(timeout=2)
     assert woke == [0.75]
+
+
+def test_an_external_clock_starts_at_its_first_sample() -> None:
+    # the loop anchors its ticks after its first sleep: on the simulator's first time, not
+    # on a 0.0 read before the first sample came (on one run and not another)
+    clock = ExternalClock(timeout=2.0)
+    threading.Timer(0.1, clock.advance, args=(1 / 128,)).start()
+    clock.sleep_until(0.0)
+    assert clock.now() == 1 / 128

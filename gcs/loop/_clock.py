@@ -46,8 +46,12 @@ class ExternalClock:
     """Time pushed by another process (the simulator's clock).
 
     ``advance(t)`` is called when a clock sample arrives; waiting loops wake up.
-    If no sample arrives for ``timeout`` wall seconds, ``sleep_until`` raises
-    :class:`ClockStoppedError` instead of hanging forever.
+    Until the first sample the clock has not started (``now()`` is 0.0): a
+    ``sleep_until`` waits for that sample whatever ``t``, so a loop that anchors
+    its schedule after it starts on the source's first time, not on a 0.0 it
+    read first on one run and not on another. If no sample arrives for
+    ``timeout`` wall seconds, ``sleep_until`` raises :class:`ClockStoppedError`
+    instead of hanging forever.
     """
 
     def __init__(self, *, timeout: float = 5.0) -> None:
@@ -55,14 +59,16 @@ class ExternalClock:
         self._cond = threading.Condition()
         self._timeout = timeout
         self._closed = False
+        self._started = False  # a sample came
 
     def advance(self, t: float) -> None:
         """Move to sim time ``t`` if it is later (never back); ValueError if not finite."""
         if not math.isfinite(t):
             raise ValueError(f"clock time must be finite, got {t}")
         with self._cond:
-            if t > self._t:
-                self._t = t
+            if t > self._t or not self._started:
+                self._t = max(self._t, t)
+                self._started = True
                 self._cond.notify_all()
 
     def close(self) -> None:
@@ -76,7 +82,7 @@ class ExternalClock:
 
     def sleep_until(self, t: float) -> None:
         with self._cond:
-            while self._t < t:
+            while self._t < t or not self._started:
                 if self._closed:
                     raise ClockStoppedError("the simulator clock was closed")
                 if not self._cond.wait(self._timeout):

@@ -43,6 +43,7 @@ class StepGate:
         self._active = 0  # participants running (or submitted and about to run)
         self._parked = 0  # participants waiting for the next window
         self._window = 0  # windows opened so far
+        self._open = False  # the loop is in a window (its thread waits in window())
         self._closed = False
         self._local = threading.local()
 
@@ -65,17 +66,31 @@ class StepGate:
     def submit(self, executor: Executor, fn: Callable[..., T], *args: object) -> Future[T]:
         """Run ``fn(*args)`` on ``executor`` as a participant, counted from now on.
 
-        Counted at submission, so a window cannot close between the submit and the
-        start of the work (the work then runs in the same window).
+        Submitted in a window (an operator's request, a scenario step), the work is
+        counted at once, so the window cannot close before it starts: it runs in
+        that window. Submitted between windows (by the loop's own tick: a recovery's
+        resume, the landing after an abort's hold), it is parked until the next
+        window opens, as a participant that paused: started at once, it raced the
+        rest of the tick (a resume's hold setpoint went before or after the tick's
+        setpoints, whichever thread was first), so two runs of one seed differed.
         """
         if not self.enabled:
             return executor.submit(fn, *args)
         with self._cond:
-            self._active += 1
+            wait_for = None if self._open else self._window  # the window it must wait past
+            if wait_for is None:
+                self._active += 1
+            else:
+                self._parked += 1
         try:
-            return executor.submit(self._run, None, fn, *args)
+            return executor.submit(self._run, None, fn, *args, wait_for=wait_for)
         except BaseException:
-            self._leave()
+            with self._cond:
+                if wait_for is None or self._window != wait_for:  # a window made it active
+                    self._active -= 1
+                else:
+                    self._parked -= 1
+                self._cond.notify_all()
             raise
 
     def map(self, executor: Executor, fn: Callable[[T], object],
@@ -132,9 +147,13 @@ class StepGate:
             self._window += 1
             self._active += self._parked
             self._parked = 0
+            self._open = True
             self._cond.notify_all()
-            return self._cond.wait_for(lambda: self._active <= 0 or self._closed,
-                                       self._hold_cap_s)
+            try:
+                return self._cond.wait_for(lambda: self._active <= 0 or self._closed,
+                                           self._hold_cap_s)
+            finally:
+                self._open = False
 
     def close(self) -> None:
         """Release every parked participant and never wait again."""
@@ -156,7 +175,15 @@ class StepGate:
         finally:
             self._local.depth -= 1
 
-    def _run(self, group: _Group | None, fn: Callable[..., T], *args: object) -> T:
+    def _run(self, group: _Group | None, fn: Callable[..., T], *args: object,
+             wait_for: int | None = None) -> T:
+        if wait_for is not None:  # submitted between windows: park until the next one
+            with self._cond:
+                while self._window == wait_for and not self._closed:
+                    self._cond.wait()
+                if self._window == wait_for:  # closed before any window took it
+                    self._parked -= 1
+                    self._active += 1
         try:
             with self._marked():
                 return fn(*args)
