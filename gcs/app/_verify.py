@@ -4,9 +4,10 @@ Why: the analysis is a certificate an operator trusts before lifting a payload w
 real vehicles; flights in the lockstep simulator, one per seed of its sensor noise
 and gusts, check that no vehicle carried more, pulled harder, tilted further or
 strayed further from its shape than the analysis says it can. Each flight is a
-:func:`gcs.app.fly` in a process of its own (they run in parallel), recorded to a
-temporary .tlog and measured from the simulator's truth in it, at the guidance
-ticks: the rope tensions, the vehicles' and the payload's true positions.
+:func:`gcs.app.fly` in a process of its own (they run in parallel, as every flight of
+many seeds: ``_seeds``), recorded to a temporary .tlog and measured from the
+simulator's truth in it, at the guidance ticks: the rope tensions, the vehicles' and
+the payload's true positions.
 
 The figures, each a bound the measured worst over every flight must stay under
 (:data:`FIGURES`; :func:`compare` is the plain comparison):
@@ -27,33 +28,25 @@ The figures, each a bound the measured worst over every flight must stay under
 
 from __future__ import annotations
 
-import contextlib
-import io
+import functools
 import math
-import multiprocessing
-import os
-import sys
 import tempfile
 import time
 from collections.abc import Callable, Mapping, Sequence
-from concurrent.futures import Future, ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO
 
 import numpy as np
 
 from gcs.analysis import Analysis
-from gcs.app._fly import fly
-from gcs.app._scenario import load_scenario
-from gcs.common import ConfigError
-from gcs.config import Team, load_team, signing_line
+from gcs.app._scenario import Scenario, load_scenario
+from gcs.app._seeds import fly_seed, fly_seeds_in_parallel, jobs_for, seed_record, seeds_text
+from gcs.config import Team
 from gcs.flightlog import FlightLog, tilt_angle
 from gcs.loop import Phase
 
 __all__ = ["FIGURES", "Figure", "FlightFigures", "Row", "VerifyResult", "compare",
-           "format_verify", "measure_flight", "parse_seeds", "predictions", "rope_loads",
-           "verify"]
+           "format_verify", "measure_flight", "predictions", "rope_loads", "verify"]
 
 _LIFTED = 0.05
 """The payload counts as carried above this height, m (as the flight metrics count it)."""
@@ -279,7 +272,7 @@ def format_verify(result: VerifyResult) -> str:
                      "OK" if r.ok else "EXCEEDED"))
     widths = [max(len(row[i]) for row in (head, *body)) for i in range(len(head))]
     lines = [f"verification of {result.team} in the simulator: {result.scenario}, "
-             f"seeds {_seeds_text(result.seeds)}, {result.jobs} at a time, "
+             f"seeds {seeds_text(result.seeds)}, {result.jobs} at a time, "
              f"{result.wall_s:.0f} s"]
     lines += ["  " + "  ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)).rstrip()
               for row in (head, *body)]
@@ -296,64 +289,19 @@ def format_verify(result: VerifyResult) -> str:
     return "\n".join(lines)
 
 
-def parse_seeds(text: str) -> tuple[int, ...]:
-    """``"1-4"``, ``"7"`` or ``"1,3,9-10"`` as the seeds, in order, each once."""
-    seeds: list[int] = []
-    try:
-        for part in text.split(","):
-            lo, _, hi = part.strip().partition("-")
-            first, last = int(lo), int(hi) if hi else int(lo)
-            if first < 0 or last < first or last - first > 9999:
-                raise ValueError
-            seeds += [s for s in range(first, last + 1) if s not in seeds]
-    except ValueError:
-        raise ConfigError("--seeds", "", f"expected seeds such as 1-4 or 1,3,7 "
-                          f"(non-negative, ranges low-high), got {text!r}") from None
-    return tuple(seeds)
-
-
-def _seeds_text(seeds: tuple[int, ...]) -> str:
-    if len(seeds) > 1 and seeds == tuple(range(seeds[0], seeds[-1] + 1)):
-        return f"{seeds[0]}-{seeds[-1]}"
-    return ",".join(str(s) for s in seeds)
-
-
-class _Prefixed(io.TextIOBase):
-    """A text stream that writes whole lines to ``out``, each after ``prefix``."""
-
-    def __init__(self, out: IO[str], prefix: str) -> None:
-        super().__init__()
-        self._out, self._prefix, self._buf = out, prefix, ""
-
-    def write(self, text: str) -> int:
-        self._buf += text
-        *lines, self._buf = self._buf.split("\n")
-        for line in lines:
-            self._out.write(f"{self._prefix}{line}\n")
-        self._out.flush()
-        return len(text)
-
-    def flush(self) -> None:
-        self._out.flush()
-
-
-def _fly_seed(config: str, scenario: str, seed: int, record: str,
-              progress: bool) -> FlightFigures:
+def _fly_and_measure(team: Team, scenario: Scenario, record: str, progress: bool,
+                     seed: int) -> FlightFigures:
     """In a worker process: fly one seed, recorded, and measure it."""
-    wall0 = time.monotonic()
-    team = load_team(config)
-    with contextlib.redirect_stderr(_Prefixed(sys.stderr, f"  seed {seed}: ")):
-        result = fly(team, load_scenario(scenario), speed="max", record=Path(record),
-                     progress=progress, seed=seed)
-    wall = time.monotonic() - wall0
+    flight = fly_seed(team, scenario, seed, record=record, progress=progress)
+    result = flight.result
     weight = team.config.payload.mass * team.config.analysis.gravity
     try:
-        log = FlightLog.load(record)
+        log = FlightLog.load(seed_record(record, seed))
     except Exception as exc:  # nothing recorded: the flight did not get far
-        return FlightFigures(seed=seed, completed=False, wall_s=wall,
+        return FlightFigures(seed=seed, completed=False, wall_s=flight.wall_s,
                              error=result.error or f"no log: {exc}")
     return measure_flight(log, weight, seed=seed, completed=result.error is None,
-                          error=result.error, wall_s=wall)
+                          error=result.error, wall_s=flight.wall_s)
 
 
 def verify(team: Team, scenario: str | Path, analysis: Analysis, *,
@@ -366,32 +314,15 @@ def verify(team: Team, scenario: str | Path, analysis: Analysis, *,
     ``progress`` gets one line per flight started and ended; ``flight_progress``
     lets each flight print its steps on stderr, prefixed with its seed.
     """
-    say = progress or (lambda _line: None)
-    jobs = max(1, min(jobs or os.cpu_count() or 1, len(seeds)))
-    signing_line(team.config.gcs, Path(team.source).parent)  # the key once, before any sim
+    jobs = jobs_for(jobs, len(seeds))
     wall0 = time.monotonic()
-    flights: list[FlightFigures] = []
-    with tempfile.TemporaryDirectory(prefix="gcs-verify-") as tmp, ProcessPoolExecutor(
-            max_workers=jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
-        futures: dict[Future[FlightFigures], int] = {}
-        for seed in seeds:
-            record = str(Path(tmp) / f"seed{seed}.tlog")
-            futures[pool.submit(_fly_seed, str(team.source), str(scenario), seed, record,
-                                flight_progress)] = seed
-        say(f"flying {len(seeds)} flight(s), seeds {_seeds_text(tuple(seeds))}, "
-            f"{jobs} at a time")
-        for future in as_completed(futures):
-            seed = futures[future]
-            try:
-                f = future.result()
-            except Exception as exc:  # the worker died (killed, out of memory...)
-                f = FlightFigures(seed=seed, completed=False, wall_s=0.0,
-                                  error=f"{type(exc).__name__}: {exc}")
-            flights.append(f)
-            state = "completed" if f.completed else f"did NOT complete: {f.error}"
-            say(f"seed {seed} {state} ({len(flights)}/{len(seeds)}, "
-                f"{time.monotonic() - wall0:.0f} s)")
-    flights.sort(key=lambda f: f.seed)
+    with tempfile.TemporaryDirectory(prefix="gcs-verify-") as tmp:
+        work = functools.partial(_fly_and_measure, team, load_scenario(scenario),
+                                 str(Path(tmp) / "flight.tlog"), flight_progress)
+        flights = fly_seeds_in_parallel(
+            team, work, seeds, jobs=jobs, say=progress, error_of=lambda f: f.error,
+            lost=lambda seed, why: FlightFigures(seed=seed, completed=False, wall_s=0.0,
+                                                 error=why))
     name = Path(scenario).stem
     return VerifyResult(team=team.config.name, scenario=name, seeds=tuple(seeds), jobs=jobs,
                         wall_s=time.monotonic() - wall0, flights=tuple(flights),
