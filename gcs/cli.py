@@ -16,6 +16,7 @@ from gcs.common import ConfigError
 
 if TYPE_CHECKING:
     from gcs.analysis import Analysis
+    from gcs.app import Scenario
     from gcs.config import Team
     from gcs.flightlog import FlightLog
 
@@ -38,16 +39,22 @@ def _verify(args: argparse.Namespace, team: Team, analysis: Analysis) -> int:
     """``gcs analyze --verify``: the team flown once per seed, measured against ``analysis``."""
     import json
 
-    from gcs.app import check_scenario, format_verify, load_scenario, parse_seeds, verify
+    from gcs.app import (
+        check_scenario,
+        format_verify,
+        load_scenario,
+        parse_jobs,
+        parse_seeds,
+        verify,
+    )
     from gcs.common import default_config
 
     scenario = args.scenario or str(default_config("scenarios/paper_flight.yaml"))
     seeds = parse_seeds(args.seeds)
-    if args.jobs is not None and args.jobs < 1:
-        raise ConfigError("--jobs", "", f"must be at least 1, got {args.jobs}")
+    jobs = parse_jobs(args.jobs)
     for warning in check_scenario(load_scenario(scenario), team, scenario, analysis=analysis):
         print(f"gcs analyze: warning: {warning}", file=sys.stderr)
-    result = verify(team, scenario, analysis, seeds=seeds, jobs=args.jobs,
+    result = verify(team, scenario, analysis, seeds=seeds, jobs=jobs,
                     progress=lambda line: print(f"gcs analyze --verify: {line}",
                                                 file=sys.stderr, flush=True))
     print(json.dumps(result.to_json()) if args.json else format_verify(result))
@@ -127,10 +134,28 @@ def _cmd_fly(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from gcs.analysis import analyze
-    from gcs.app import check_scenario, fly, load_scenario
+    from gcs.app import (
+        check_scenario,
+        flies_real_vehicles,
+        fly,
+        load_scenario,
+        parse_jobs,
+        parse_seeds,
+    )
     from gcs.config import load_team
 
+    seeds = None if args.seeds is None else parse_seeds(args.seeds)
+    jobs = parse_jobs(args.jobs)
+    if seeds is None and jobs is not None:
+        raise ConfigError("--jobs", "", "is the number of flights of --seeds at a time: "
+                          "give --seeds too")
+    if seeds is not None and args.connect:
+        raise ConfigError("--seeds", "", "each seed is flown on a simulator of its own: "
+                          "not with --connect")
     team = load_team(args.config)
+    if seeds is not None and flies_real_vehicles(team):
+        raise ConfigError("--seeds", "", f"the seeds are the simulator's, and the links of "
+                          f"{team.source} reach px4/ardupilot autopilots")
     if args.insecure:
         team = team.without_signing()
     scenario = load_scenario(args.scenario)
@@ -139,13 +164,15 @@ def _cmd_fly(args: argparse.Namespace) -> int:
         return 1
     for warning in check_scenario(scenario, team, args.scenario, analysis=analysis):
         print(f"gcs fly: warning: {warning}", file=sys.stderr)
-    if args.speed != "max":
+    if args.speed not in (None, "max"):  # None: max, or 1 on real autopilots (gcs.app.fly)
         try:
             if float(args.speed) <= 0:
                 raise ValueError
         except ValueError:
             raise ConfigError("--speed", "", f"must be a positive number or 'max', "
                               f"got {args.speed!r}") from None
+    if seeds is not None:
+        return _fly_seeds(args, team, scenario, seeds, jobs)
     result = fly(team, scenario, speed=args.speed,
                  record=Path(args.record) if args.record else None, connect=args.connect,
                  progress=not args.quiet, override_analysis=args.override_analysis)
@@ -157,6 +184,23 @@ def _cmd_fly(args: argparse.Namespace) -> int:
         for key, value in data.items():
             print(f"{key:<{width}}  {value}")
     return 0 if result.error is None else 1
+
+
+def _fly_seeds(args: argparse.Namespace, team: Team, scenario: Scenario,
+               seeds: tuple[int, ...], jobs: int | None) -> int:
+    """``gcs fly --seeds``: the scenario flown once per seed, ``jobs`` at a time, and the
+    spread of each figure over them (exit 1 if a flight did not complete)."""
+    import json
+
+    from gcs.testing import fly_seeds, format_seed_runs
+
+    runs = fly_seeds(team, scenario, seeds, jobs=jobs, speed=args.speed or "max",
+                     record=args.record,
+                     override_analysis=args.override_analysis,
+                     progress=None if args.quiet else lambda line: print(
+                         f"gcs fly: {line}", file=sys.stderr, flush=True))
+    print(json.dumps(runs.to_json()) if args.json else format_seed_runs(runs))
+    return 0 if runs.ok else 1
 
 
 def _load_log(path: Path, command: str, *, quiet: bool) -> FlightLog | None:
@@ -342,7 +386,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seeds", default="1-4", metavar="SEEDS",
                    help="simulator seeds of --verify (sensor noise, gusts): 1-4 (default), "
                         "7, 1,3,9-10")
-    p.add_argument("--jobs", type=int, metavar="N",
+    p.add_argument("--jobs", metavar="N",
                    help="flights of --verify at a time (default: the machine's cores)")
     p.set_defaults(func=_cmd_analyze)
 
@@ -356,19 +400,30 @@ def build_parser() -> argparse.ArgumentParser:
     # REMAINDER positional refused them, since they start with "--"
     p.set_defaults(func=_cmd_sim, sim_args=[])
 
-    p = sub.add_parser("fly", help="fly a scenario headless with simulated vehicles",
+    p = sub.add_parser("fly", help="fly a scenario headless, simulated or on real autopilots",
                        description="Starts the simulated team (or joins a running `gcs sim` "
                                    "with --connect), plays the scenario's operator inputs "
-                                   "and prints the flight metrics. Exit 1 if the flight "
-                                   "did not complete.")
+                                   "and prints the flight metrics. A team whose links: reach "
+                                   "px4/ardupilot autopilots (or their SITL) is flown on "
+                                   "them, on the wall clock, with no simulator: payload and "
+                                   "rope figures are then null. Exit 1 if the flight did "
+                                   "not complete.")
     p.add_argument("--config", required=True, help="team config (YAML)")
     p.add_argument("--scenario", required=True, help="scenario (YAML), e.g. "
                    "configs/scenarios/paper_flight.yaml")
-    p.add_argument("--speed", default="max",
-                   help="sim seconds per wall second, or 'max' (default)")
+    p.add_argument("--speed", default=None,
+                   help="sim seconds per wall second, or 'max' (default); a team whose links "
+                        "reach px4/ardupilot autopilots flies at 1 only")
     p.add_argument("--record", metavar="FILE", help="record the flight to a .tlog")
     p.add_argument("--connect", metavar="ENDPOINT",
                    help="join a running `gcs sim` at this zenoh endpoint instead")
+    p.add_argument("--seeds", metavar="SEEDS",
+                   help="fly once per simulator seed (sensor noise, gusts), e.g. 1-20 or "
+                        "1,3,9-10, in parallel, and print the spread of each figure over "
+                        "them: min, median, p90, max, mean, worst seed (default: one "
+                        "flight, seed 0); with --record FILE each to FILE_seedN.tlog")
+    p.add_argument("--jobs", metavar="N",
+                   help="flights of --seeds at a time (default: the machine's cores)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     _add_flight_options(p)

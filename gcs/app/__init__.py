@@ -2,17 +2,21 @@
 
 :class:`GcsApp` is what ``gcs run`` and ``gcs demo`` start (links, clock,
 operator, recorder and the loop); :class:`SimProcess` starts ``python -m sim``;
-:func:`fly` plays a :class:`Scenario` in lockstep with the simulator.
+:func:`fly` plays a :class:`Scenario` in lockstep with the simulator, or on the
+wall clock with the real autopilots a team's ``links:`` reach;
+:func:`fly_seeds_in_parallel` flies one simulated flight per seed, N at a time.
 
 Modules:
 
     ``_app``         The GCS process, assembled: links, clock, operator, recorder and the 4
                      Hz loop.
-    ``_fly``         ``gcs fly``: a headless flight of a scenario with simulated vehicles,
-                     and its metrics.
+    ``_fly``         ``gcs fly``: a headless flight of a scenario, simulated or on real
+                     autopilots, and its metrics.
     ``_scenario``    Scripted operator inputs: a scenario is a list of steps played through
                      the same operator-command object and phase actions as the browser and
                      the gamepad.
+    ``_seeds``       Flights of many seeds in parallel: one lockstep flight per simulator
+                     seed, N at a time.
     ``_simprocess``  Start the simulated team (``python -m sim``) as a child process and
                      wait until it is up.
     ``_verify``      ``gcs analyze --verify``: fly the team in the simulator and hold the
@@ -20,7 +24,13 @@ Modules:
 """
 
 from gcs.app._app import LOOP_GIL_SWITCH_S, GcsApp
-from gcs.app._fly import FlightResult, HeadlessFlight, fly
+from gcs.app._fly import (
+    REAL_PROFILES,
+    FlightResult,
+    HeadlessFlight,
+    flies_real_vehicles,
+    fly,
+)
 from gcs.app._scenario import (
     Scenario,
     ScenarioError,
@@ -30,6 +40,16 @@ from gcs.app._scenario import (
     load_scenario,
     play,
     play_step,
+)
+from gcs.app._seeds import (
+    SeedFlight,
+    fly_seed,
+    fly_seeds_in_parallel,
+    jobs_for,
+    parse_jobs,
+    parse_seeds,
+    seed_record,
+    seeds_text,
 )
 from gcs.app._simprocess import SimProcess, SimStartError, free_tcp_port
 from gcs.app._verify import (
@@ -41,7 +61,6 @@ from gcs.app._verify import (
     compare,
     format_verify,
     measure_flight,
-    parse_seeds,
     predictions,
     rope_loads,
     verify,
@@ -50,6 +69,7 @@ from gcs.app._verify import (
 __all__ = [
     "FIGURES",
     "LOOP_GIL_SWITCH_S",
+    "REAL_PROFILES",
     "Figure",
     "FlightFigures",
     "FlightResult",
@@ -58,6 +78,7 @@ __all__ = [
     "Row",
     "Scenario",
     "ScenarioError",
+    "SeedFlight",
     "SimProcess",
     "SimStartError",
     "Step",
@@ -65,15 +86,22 @@ __all__ = [
     "VerifyResult",
     "check_scenario",
     "compare",
+    "flies_real_vehicles",
     "fly",
+    "fly_seed",
+    "fly_seeds_in_parallel",
     "format_verify",
     "free_tcp_port",
+    "jobs_for",
     "load_scenario",
     "measure_flight",
+    "parse_jobs",
     "parse_seeds",
     "play",
     "play_step",
     "predictions",
     "rope_loads",
+    "seed_record",
+    "seeds_text",
     "verify",
 ]

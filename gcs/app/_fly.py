@@ -1,17 +1,21 @@
-"""``gcs fly``: a headless flight of a scenario with simulated vehicles, and its metrics.
+"""``gcs fly``: a headless flight of a scenario, simulated or on real autopilots, and its
+metrics.
 
 Starts the simulated team behind zenoh (or joins a running ``gcs sim``), plays
 the scenario through the same operator command and phase actions as the
 browser, and returns the flight metrics. With the sim started here the GCS and
 the sim run in lockstep, so the flight is as fast as the machine allows (or
-paced with ``speed``) and repeatable. :class:`HeadlessFlight` is that flight, played
-by a scenario here and call by call by :class:`gcs.testing.SimTeam`.
+paced with ``speed``) and repeatable. A team whose ``links:`` reach PX4 or
+ArduPilot autopilots flies as ``gcs run`` flies it instead: no simulator, on the
+wall clock, without faults or ground truth. :class:`HeadlessFlight` is that
+flight, played by a scenario here and call by call by :mod:`gcs.testing`.
 """
 
 from __future__ import annotations
 
 import contextlib
 import copy
+import dataclasses
 import sys
 import threading
 import time
@@ -22,16 +26,47 @@ from pathlib import Path
 from gcs.app._app import GcsApp
 from gcs.app._scenario import Scenario, ScenarioError, Step, play, play_step
 from gcs.app._simprocess import SimProcess, free_tcp_port
+from gcs.common import ConfigError
 from gcs.config import Team, seal_key, signing_line
 from gcs.flightlog import FlightMetrics
 from gcs.loop import GatedClock, RuntimeSnapshot
 from gcs.transport import ZenohSettings
 from gcs.wire import Sealer, SimTruth, keys
 
-__all__ = ["CONTROL_ANSWER_S", "FlightResult", "HeadlessFlight", "fly"]
+__all__ = ["CONTROL_ANSWER_S", "REAL_PROFILES", "FlightResult", "HeadlessFlight",
+           "flies_real_vehicles", "fly"]
 
 CONTROL_ANSWER_S = 10.0
 """Longest wall time the simulator may take to answer a control message, s."""
+
+REAL_PROFILES = frozenset({"px4", "ardupilot"})
+"""The link profiles of real autopilots (and of their SITL)."""
+
+
+def flies_real_vehicles(team: Team) -> bool:
+    """Whether ``team``'s ``links:`` reach real autopilots (a px4 or ardupilot profile).
+
+    Such a team is flown as ``gcs run`` flies it: no simulator is started, the
+    loop runs on the wall clock (a real vehicle cannot be paced or stepped), and
+    what only a simulator has (faults on command, ground truth) is unavailable.
+    """
+    return any(link.profile in REAL_PROFILES for link in team.config.links or ())
+
+
+def _check_real(team: Team, speed: str | None, connect: str | None) -> None:
+    """Refuse what a flight of real vehicles cannot do, naming why (one line)."""
+    if connect is not None:
+        raise ConfigError("--connect", "", f"joins a running simulator, but the links of "
+                          f"{team.source} reach px4/ardupilot autopilots: leave it out")
+    if speed is not None:
+        try:
+            one = float(speed) == 1.0
+        except ValueError:
+            one = False
+        if not one:
+            raise ConfigError("--speed", "", f"the links of {team.source} reach px4/ardupilot "
+                              f"autopilots, which fly on the wall clock: speed 1 only, "
+                              f"got {speed!r}")
 
 
 @dataclass
@@ -56,13 +91,19 @@ class HeadlessFlight:
     it plays and the faults it injects act at ticks, and a flight is the same on
     every run. Every tick feeds the flight's metrics.
 
+    A team on px4/ardupilot links (:func:`flies_real_vehicles`, :attr:`real`) starts
+    no simulator: the GCS reaches the vehicles through the team file's links and
+    runs on the wall clock (``speed`` 1 only; ``connect``, ``seed`` and ``lockstep``
+    do not apply), faults are refused and the metrics leave out ground truth.
+
     Why a class: ``gcs fly`` plays a scenario file through it and
-    :class:`gcs.testing.SimTeam` one step per call, so a scripted flight has one
-    implementation.
+    :mod:`gcs.testing` (``SimTeam``, ``Team.connect``) one step per call, so a
+    scripted flight has one implementation.
 
     Args:
         team: the loaded team.
-        speed: the simulator's pace, sim seconds per wall second, or ``"max"``.
+        speed: the simulator's pace, sim seconds per wall second, or ``"max"``
+            (default; real vehicles: 1, the only pace they take).
         record: .tlog file to record to, or None.
         connect: zenoh endpoint of a running simulator to join instead of starting one.
         seed: of the started simulator's sensor noise and gusts.
@@ -72,26 +113,40 @@ class HeadlessFlight:
         ready_timeout: longest wait for the simulator started here to come up, s.
     """
 
-    def __init__(self, team: Team, *, speed: str = "max", record: Path | None = None,
+    def __init__(self, team: Team, *, speed: str | None = None, record: Path | None = None,
                  connect: str | None = None, seed: int = 0, override_analysis: bool = False,
                  lockstep: bool = True, say: Callable[[str], None] | None = None,
                  ready_timeout: float = 60.0) -> None:
         self.team = team
+        self.real = flies_real_vehicles(team)
+        """The team's links reach real autopilots: wall clock, no simulator."""
+        if self.real:
+            _check_real(team, speed, connect)
         line = signing_line(team.config.gcs, Path(team.source).parent)  # the key, before the sim
         if say is not None:
             say(line)
+            if self.real:
+                say(f"flying the vehicles {team.source}'s links reach, on the wall clock (no "
+                    f"simulator): faults and ground truth are not available")
         self.sim: SimProcess | None = None
-        if connect is None:
+        self.endpoint: str | None = None
+        """The simulator's zenoh endpoint (None: real vehicles)."""
+        settings: ZenohSettings | None = None  # real vehicles: the team file's own
+        if self.real:
+            lockstep = False
+        elif connect is None:
             self.endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
-            self.sim = SimProcess(team.source, endpoint=self.endpoint, speed=speed,
+            self.sim = SimProcess(team.source, endpoint=self.endpoint, speed=speed or "max",
                                   lockstep=lockstep, signing=team.config.gcs.signing,
                                   extra=("--seed", str(seed)), ready_timeout=ready_timeout)
         else:
             self.endpoint = connect
-        # a simulator elsewhere is joined as the team file says (TLS across machines); the one
-        # started here listens on loopback in the clear
-        settings = ZenohSettings(mode="peer", connect=(self.endpoint,),
-                                 tls=team.config.gcs.zenoh.tls if connect is not None else None)
+        if self.endpoint is not None:
+            # a simulator elsewhere is joined as the team file says (TLS across machines);
+            # the one started here listens on loopback in the clear
+            settings = ZenohSettings(mode="peer", connect=(self.endpoint,),
+                                     tls=team.config.gcs.zenoh.tls if connect is not None
+                                     else None)
         self.metrics = FlightMetrics()
         self._metrics_lock = threading.Lock()
         self._counted: RuntimeSnapshot | None = None  # the latest tick in the metrics
@@ -100,7 +155,7 @@ class HeadlessFlight:
         self._playing = contextlib.ExitStack()
         self._player: int | None = None  # the thread that plays
         try:
-            self.app = GcsApp(team, zenoh_settings=settings, sim_clock=True,
+            self.app = GcsApp(team, zenoh_settings=settings, sim_clock=not self.real,
                               lockstep=lockstep and self.sim is not None, record=record,
                               override_analysis=override_analysis)
         except BaseException:
@@ -115,8 +170,13 @@ class HeadlessFlight:
 
     def _on_tick(self, snap: RuntimeSnapshot, _truth: SimTruth | None) -> None:
         with self._metrics_lock:
-            self.metrics.add(snap)
+            self.metrics.add(self._measured(snap))
             self._counted = snap
+
+    def _measured(self, snap: RuntimeSnapshot) -> RuntimeSnapshot:
+        """What the metrics take of a tick: on real vehicles no ground truth, even if a
+        simulator on the team's zenoh publishes some (its payload is not theirs)."""
+        return dataclasses.replace(snap, truth=None) if self.real else snap
 
     def start(self) -> None:
         """Start the loop, the calling thread a participant of the lockstep from now on."""
@@ -136,13 +196,17 @@ class HeadlessFlight:
     def control(self, payload: bytes) -> str:
         """Send ``payload``, sealed with the team key, on the simulator's control key (a
         fault injected on purpose: ``sim._faults``); returns the simulator's answer
-        (``queued``, or why it refused it), or ``sent`` to a simulator joined.
+        (``queued``, or why it refused it), or ``sent`` to a simulator joined; RuntimeError
+        on real vehicles.
 
         To the simulator started here it goes as a query, answered once the message is
         queued: sent by the playing thread in lockstep, it is then ahead of the tick's
         ack, so it acts at this tick's sim time on every run (a put could be overtaken
         by the ack: zenoh runs each subscriber on a thread of its own).
         """
+        if self.real:
+            raise RuntimeError("faults are injected into the simulator: not available on "
+                               "real vehicles")
         topic = keys.sim(self.app.fleet, "control")
         if self._sealer is None:
             key = seal_key(self.team.config.gcs, Path(self.team.source).parent)
@@ -179,7 +243,7 @@ class HeadlessFlight:
             metrics, snap = self.metrics, self.app.loop.snapshot
             if this_tick and snap is not None and snap is not self._counted:
                 metrics = copy.deepcopy(metrics)
-                metrics.add(snap)
+                metrics.add(self._measured(snap))
             return metrics.to_json(wall_seconds=wall) | loop
 
     def simulator_exit(self) -> str | None:
@@ -208,11 +272,13 @@ class HeadlessFlight:
         self.close()
 
 
-def fly(team: Team, scenario: Scenario, *, speed: str = "max", record: Path | None = None,
-        connect: str | None = None, progress: bool = True,
+def fly(team: Team, scenario: Scenario, *, speed: str | None = None,
+        record: Path | None = None, connect: str | None = None, progress: bool = True,
         override_analysis: bool = False, seed: int = 0) -> FlightResult:
-    """Fly ``scenario``; blocks until it ends. ``connect``: endpoint of a running sim;
-    ``seed``: of the started sim's sensor noise and gusts."""
+    """Fly ``scenario``; blocks until it ends. ``speed``: of the sim (default ``"max"``;
+    real vehicles: 1 only); ``connect``: endpoint of a running sim; ``seed``: of the
+    started sim's sensor noise and gusts. A team on px4/ardupilot links flies those
+    (:class:`HeadlessFlight`); a bad ``speed`` or ``connect`` for it is a ConfigError."""
 
     def say(line: str) -> None:
         if progress:

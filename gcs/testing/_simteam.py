@@ -7,37 +7,24 @@ starts the simulator and a headless GCS in lockstep on the simulator's clock
 scenario step per call (:func:`gcs.app.play_step`), so a test and a scenario
 file fly the same way. In lockstep the simulated world stands still while the
 test's own code runs between two calls, so every run of a seed is the same
-flight, whatever the machine's load.
+flight, whatever the machine's load. The calls are those of
+:class:`gcs.testing.Team` (``_team``), shared with real vehicles; the
+simulator's own parts are here: its start and the faults.
 """
 
 from __future__ import annotations
 
 import json
 import math
-import threading
-import warnings
-import weakref
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Protocol
 
-import numpy as np
+from gcs.app import HeadlessFlight
+from gcs.config import Team as LoadedTeam
+from gcs.config import load_team
+from gcs.testing._team import FlightError, Team
 
-from gcs.app import (
-    GcsApp,
-    HeadlessFlight,
-    Scenario,
-    ScenarioError,
-    Step,
-    check_scenario,
-)
-from gcs.common import from_mapping
-from gcs.config import Team, load_team
-from gcs.loop import ClockStoppedError, Phase, RuntimeSnapshot
-from gcs.testing._metrics import Metrics
-
-__all__ = ["FlightError", "FlightEvent", "SimTeam", "TeamState"]
+__all__ = ["SimTeam"]
 
 GUST_MAX_M_S = 30.0
 """Largest gust per axis the simulator takes, m/s (``sim._faults.GUST_MAX_M_S``)."""
@@ -46,62 +33,7 @@ FAULT_MAX_S = 3600.0
 """Longest timed cut or gust the simulator takes, s (``sim._faults.FAULT_MAX_S``)."""
 
 
-class FlightError(ScenarioError):
-    """A call of :class:`SimTeam` that could not be done: the step and why, then the
-    latest warnings of the flight."""
-
-
-class FlightEvent(Protocol):
-    """An event of the flight, as the live page lists it."""
-
-    @property
-    def t(self) -> float:
-        """Sim time, s."""
-
-    @property
-    def level(self) -> str:
-        """``info``, ``warning`` or ``error``."""
-
-    @property
-    def text(self) -> str:
-        """What happened, one line."""
-
-
-@dataclass(frozen=True)
-class TeamState:
-    """The team at one tick: what the GCS measured (telemetry, in the team frame) and, from
-    the simulator, the ground truth (its world frame, which is the team frame: the
-    simulated vehicles share one local frame). Arrays in formation order, NED, SI."""
-
-    t: float
-    """Sim time of the tick, s."""
-    ids: tuple[int, ...]
-    phase: Phase
-    p_ned: np.ndarray
-    """(n, 3) positions the GCS flies on, m."""
-    v_ned: np.ndarray
-    """(n, 3) velocities the GCS flies on, m/s."""
-    distance_errors: np.ndarray
-    """(edges,) distance error of every edge of the formation (at the scale flown), m."""
-    true_p_ned: np.ndarray | None
-    """(n, 3) true positions, m (None before the first truth sample)."""
-    payload_p_ned: np.ndarray | None
-    payload_v_ned: np.ndarray | None
-    rope_tension: np.ndarray | None
-    """(n,) tension of each vehicle's rope, N."""
-
-    @classmethod
-    def of(cls, snap: RuntimeSnapshot) -> TeamState:
-        truth, fleet = snap.truth, snap.fleet
-        return cls(t=fleet.t, ids=fleet.ids, phase=snap.phase, p_ned=fleet.p_ned.copy(),
-                   v_ned=fleet.v_ned.copy(), distance_errors=snap.distance_errors.copy(),
-                   true_p_ned=None if truth is None else np.array(truth.vehicle_p_ned),
-                   payload_p_ned=None if truth is None else np.array(truth.payload_p_ned),
-                   payload_v_ned=None if truth is None else np.array(truth.payload_v_ned),
-                   rope_tension=None if truth is None else np.array(truth.rope_tension))
-
-
-class SimTeam:
+class SimTeam(Team):
     """A simulated team and a headless GCS flying it, one call per step.
 
     Every call that flies blocks until it is done, in sim seconds, or raises
@@ -123,89 +55,17 @@ class SimTeam:
             on a quiet machine, over a minute on a loaded one).
     """
 
-    def __init__(self, config: str | Path | Team, *, seed: int = 0,
+    def __init__(self, config: str | Path | LoadedTeam, *, seed: int = 0,
                  speed: float | str = "max", record: str | Path | None = None,
                  lockstep: bool = True, insecure: bool = False,
                  override_analysis: bool = False, start_timeout: float = 300.0) -> None:
-        team = config if isinstance(config, Team) else load_team(config)
+        team = config if isinstance(config, LoadedTeam) else load_team(config)
         if insecure:
             team = team.without_signing()
-        self.team = team
-        self._owner = threading.get_ident()
-        self._flight = HeadlessFlight(
+        super().__init__(HeadlessFlight(
             team, speed=_speed(speed, lockstep), record=None if record is None else Path(record),
             seed=_whole(seed, "seed"), override_analysis=override_analysis, lockstep=lockstep,
-            ready_timeout=start_timeout)
-        # a team left unclosed is closed when collected or at exit (the simulator dies with
-        # this process anyway: PR_SET_PDEATHSIG)
-        self._finalizer = weakref.finalize(self, self._flight.close)
-        try:
-            self._flight.start()
-            # in lockstep, the test starts at the first tick on every run; else once ticking
-            if not self._flight.app.gate.pause():
-                self._until(lambda: self._flight.app.loop.snapshot is not None, 30.0,
-                            "the first tick")
-        except BaseException:
-            self.close()
-            raise
-
-    # -- the flight -----------------------------------------------------------------------
-
-    def arm(self, *, timeout: float = 120.0) -> None:
-        """Arm every vehicle, once the pre-flight checks pass (phase *armed*)."""
-        self._play("arm", {"action": "arm", "timeout": timeout})
-
-    def takeoff(self, *, timeout: float = 120.0) -> None:
-        """Take off to the hover above the payload (phase *hover*)."""
-        self._play("takeoff", {"action": "takeoff", "timeout": timeout})
-
-    def lift(self, *, timeout: float = 120.0) -> None:
-        """Lift the payload and fly in formation (phase *formation*)."""
-        self._play("lift", {"action": "lift", "timeout": timeout})
-
-    def set_down(self, *, timeout: float = 120.0) -> None:
-        """Set the payload down (back to *hover*)."""
-        self._play("set_down", {"action": "set_down", "timeout": timeout})
-
-    def land(self, *, timeout: float = 120.0) -> None:
-        """Land and disarm (phase *landed*)."""
-        self._play("land", {"action": "land", "timeout": timeout})
-
-    def abort(self, *, timeout: float = 120.0) -> None:
-        """Abort: hold, then land (phase *landed*)."""
-        self._play("abort", {"action": "abort", "timeout": timeout})
-
-    def resume(self, *, timeout: float = 120.0) -> None:
-        """Bring vehicles that fell into HOLD back to the GCS's setpoints."""
-        self._play("resume", {"action": "resume", "timeout": timeout})
-
-    def sticks(self, forward: float = 0.0, right: float = 0.0, rotate: float = 0.0, *,
-               seconds: float, timeout: float = 120.0) -> None:
-        """Hold the sticks (each in [-1, 1]) until the team has flown them ``seconds`` of
-        sim time, then centre them. Time in which the motion was frozen (a stale
-        vehicle, one out of its mode) does not count; frozen for ``timeout``: FlightError."""
-        self._play("sticks", {"sticks": {"forward": forward, "right": right, "rotate": rotate},
-                              "duration": seconds, "timeout": timeout})
-
-    def wait(self, seconds: float) -> None:
-        """Let ``seconds`` of sim time pass, sticks centred (FlightError if the flight was
-        aborted meanwhile)."""
-        self._play("wait", {"wait": seconds})
-
-    def scale(self, scale: float) -> None:
-        """Grow or shrink the shape to ``scale`` times the team file's (from the next tick
-        on; the team takes a while to get there: :meth:`wait`)."""
-        self._play("scale", {"scale": scale}, checked=True)
-
-    def altitude(self, altitude: float) -> None:
-        """Climb or descend to ``altitude`` m above the ground (from the next tick on)."""
-        self._play("altitude", {"altitude": altitude}, checked=True)
-
-    def wait_for(self, phase: Phase | str, *, timeout: float = 120.0) -> None:
-        """Wait until the team is in ``phase`` (a :class:`gcs.loop.Phase` or its text, e.g.
-        ``"landed"``), at most ``timeout`` s of sim time: after a fault, the landing."""
-        want = phase if isinstance(phase, Phase) else _phase_named(phase)
-        self._until(lambda: self.phase is want, timeout, f"wait_for({want.text!r})")
+            ready_timeout=start_timeout))
 
     # -- faults ---------------------------------------------------------------------------
 
@@ -235,86 +95,13 @@ class SimTeam:
                              f"got {list(wind_ned)!r}")
         self._fault({"action": "gust", "sysid": 0, "ned": wind, "seconds": _duration(seconds)})
 
-    # -- what the test reads --------------------------------------------------------------
-
-    @property
-    def time(self) -> float:
-        """Sim time, s."""
-        return self._flight.app.clock.now()
-
-    @property
-    def phase(self) -> Phase:
-        """The flight phase as of the last tick."""
-        return self._snapshot().phase
-
-    @property
-    def events(self) -> tuple[FlightEvent, ...]:
-        """Every event so far (phases, warnings, errors), oldest first."""
-        return self._flight.app.loop.events()
-
-    def state(self) -> TeamState:
-        """The team as of the last tick: measured, and the simulator's truth."""
-        return TeamState.of(self._snapshot())
-
-    def metrics(self) -> Metrics:
-        """The flight's figures so far: those of ``gcs fly --json``, as attributes."""
-        return Metrics.from_json(self._flight.figures(this_tick=True))
-
-    @property
-    def app(self) -> GcsApp:
-        """The GCS flying the team (its runtime, links, operator), for what this class
-        does not offer."""
-        return self._flight.app
-
     @property
     def endpoint(self) -> str:
         """The zenoh endpoint the simulator listens on."""
+        assert self._flight.endpoint is not None, "a SimTeam starts its simulator"
         return self._flight.endpoint
 
-    # -- closing --------------------------------------------------------------------------
-
-    def close(self) -> None:
-        """Stop the GCS and the simulator and close their ports; idempotent."""
-        self._finalizer()
-
-    def __enter__(self) -> SimTeam:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
     # -- helpers --------------------------------------------------------------------------
-
-    def _play(self, what: str, fields: dict[str, object], *, checked: bool = False) -> None:
-        """Play one step (built and checked as a scenario file's would be)."""
-        source = f"SimTeam.{what}"
-        step = from_mapping(Step, fields, source)
-        if checked:
-            scenario = Scenario(name=source, steps=(step,))
-            for warning in check_scenario(scenario, self.team, source):
-                warnings.warn(warning, stacklevel=3)
-        self._flying()
-        try:
-            self._flight.play_step(step, where=f"{what}()")
-        except ScenarioError as exc:
-            raise FlightError(f"{exc}{self._warnings(str(exc))}") from None
-        except ClockStoppedError as exc:
-            raise FlightError(self._stopped(f"{what}()", exc)) from None
-
-    def _until(self, done: Callable[[], bool], timeout: float, what: str) -> None:
-        """Let ticks pass until ``done()``; FlightError after ``timeout`` s of sim time."""
-        self._flying()
-        clock = self._flight.clock
-        start = clock.now()
-        period = self._flight.app.loop.period
-        try:
-            while not done():
-                if clock.now() - start > timeout:
-                    raise FlightError(f"{what}: not done after {timeout:g} s (phase "
-                                      f"{self.phase.text}){self._warnings('')}")
-                clock.sleep_until(clock.now() + period / 2)
-        except ClockStoppedError as exc:
-            raise FlightError(self._stopped(what, exc)) from None
 
     def _fault(self, command: dict[str, object]) -> None:
         self._flying()
@@ -328,33 +115,6 @@ class SimTeam:
             raise ValueError(f"no vehicle {sysid!r} in {self.team.source} (vehicles "
                              f"{', '.join(str(i) for i in ids)})")
         return sysid
-
-    def _snapshot(self) -> RuntimeSnapshot:
-        snap = self._flight.app.loop.snapshot
-        assert snap is not None, "the constructor waits for the first tick"
-        return snap
-
-    def _flying(self) -> None:
-        if not self._finalizer.alive:
-            raise RuntimeError("this SimTeam is closed")
-        if threading.get_ident() != self._owner:
-            raise RuntimeError("a SimTeam is flown by the thread that made it (its steps act "
-                               "at the lockstep's ticks)")
-
-    def _warnings(self, said: str) -> str:
-        """``; latest warnings: ...``: the last three not already in ``said``."""
-        latest = [e.text for e in self.events if e.level != "info" and e.text not in said]
-        return f"; latest warnings: {' | '.join(latest[-3:])}" if latest else ""
-
-    def _stopped(self, what: str, exc: ClockStoppedError) -> str:
-        return f"{what}: {exc}{self._flight.simulator_exit() or ''}{self._warnings(str(exc))}"
-
-
-def _phase_named(text: str) -> Phase:
-    for phase in Phase:
-        if phase.text == text or phase.name.lower() == text.lower():
-            return phase
-    raise ValueError(f"no phase {text!r} (one of {', '.join(p.text for p in Phase)})")
 
 
 def _speed(speed: float | str, lockstep: bool) -> str:
