@@ -4,12 +4,15 @@ Four scripted PX4s and ArduPilots (real pymavlink bytes on UDP,
 :mod:`tests.scripted_autopilot`) on the paper's square, each with its own
 origin and GPS as a real one has. A good start arms (ArduPilot in GUIDED
 first); each fault refuses the arm with one error naming the vehicle and the
-reason, and no vehicle is sent an arm command.
+reason, and no vehicle is sent an arm command. While the team is ready, the
+snapshot lists the checks that fail already (:meth:`gcs.loop.Prearm.watch`),
+from what the GCS heard, before anyone presses ARM.
 """
 
 from __future__ import annotations
 
 import math
+import time
 from typing import Any
 
 import numpy as np
@@ -17,7 +20,7 @@ import pytest
 
 from gcs.config import GeoPoint, TeamFrameConfig, load_team
 from gcs.loop import Phase
-from gcs.wire import CopterMode
+from gcs.wire import CopterMode, mavlink
 from tests.scripted_autopilot import ARM, REF, SET_MODE, SQUARE, Bench, moved, peer_team
 
 SQUARE_IDS = (1, 2, 3, 4)
@@ -58,9 +61,26 @@ def refusal(bench: Bench) -> str:
     return errors[0]
 
 
+def ready_checks(bench: Bench, *vids: int, timeout_s: float = 5.0) -> tuple[str, ...]:
+    """Tick while ready until the snapshot's failing checks name exactly vehicles ``vids``,
+    one line each (none: until every check passes; they run again every
+    :data:`gcs.loop._prearm.READY_CHECK_PERIOD_S`, and an origin may come a moment after
+    the team is ready); what they say then."""
+    deadline = time.monotonic() + timeout_s
+    want = [f"vehicle {vid}" for vid in vids]
+    while True:
+        snap = bench.runtime.tick()
+        assert snap.phase is Phase.READY
+        if [line.split(":")[0] for line in snap.prearm] == want:
+            return snap.prearm
+        assert time.monotonic() < deadline, snap.prearm
+        time.sleep(0.1)
+
+
 def test_a_good_start_arms_with_ardupilot_in_guided_first() -> None:
     with peer_team(team_on_field()) as bench:
         bench.ready()
+        assert ready_checks(bench) == ()  # nothing fails before the arm either
         events = bench.arm()
         assert [e for e in events if e.level == "error"] == []
         assert bench.runtime.phase is Phase.ARMED
@@ -77,7 +97,14 @@ def test_a_vehicle_without_an_origin_is_not_armed() -> None:
     """GPS-less and silent about its origin: no place in the team frame."""
     peers = team_on_field(v3={"gps": False, "reports_origin": False})
     with peer_team(peers) as bench:
+        bench.ready()
+        shown = ready_checks(bench, 3)
+        # shown from what the vehicles said, nothing asked (the arm asks for its origin)
+        asked = bench.peers[3].commands(mavlink.MAV_CMD_REQUEST_MESSAGE)
         text = refusal(bench)
+    assert asked == []
+    assert shown[0].startswith("vehicle 3: no origin of its local frame")
+    assert shown[0] in text
     assert text.startswith("arm failed: checks before arming failed: vehicle 3: no origin of "
                            "its local frame"), text
     assert "vehicle 1" not in text and "vehicle 2" not in text and "vehicle 4" not in text
@@ -121,7 +148,10 @@ def test_one_origin_given_to_every_vehicle_arms() -> None:
 def test_a_team_out_of_shape_is_not_armed() -> None:
     """Vehicle 2 stands 1 m out of its place: it alone is named, with its own 1 m."""
     with peer_team(team_on_field(moved_by={2: (0.6, -0.8)})) as bench:
+        bench.ready()
+        shown = ready_checks(bench, 2)
         text = refusal(bench)
+    assert text == "arm failed: checks before arming failed: " + "; ".join(shown)
     assert text.startswith("arm failed: checks before arming failed: vehicle 2: 1.00 m from "
                            "its place in the team's shape, beyond the analysis' safe "
                            "deformation of 0.17 m"), text
@@ -131,8 +161,12 @@ def test_a_team_out_of_shape_is_not_armed() -> None:
 def test_an_autopilot_that_tilts_beyond_the_bank_limit_is_not_armed() -> None:
     peers = team_on_field(v1={"tilt_limit": 3000.0}, v4={"tilt_limit": 45.0})
     with peer_team(peers) as bench:
+        bench.ready()
+        ready_checks(bench)  # not read yet: nothing known to fail
         text = refusal(bench)
+        after = ready_checks(bench, 1, 4)  # read by the arm: shown while ready
         sets = [peer.param_sets for peer in bench.peers.values()]
+    assert all(line in text for line in after), (after, text)
     assert "vehicle 1: its tilt limit ANGLE_MAX is 30 degrees, above the config's bank limit " \
            "of 20 degrees (limits.bank_deg)" in text, text
     assert "vehicle 4: its tilt limit MPC_TILTMAX_AIR is 45 degrees" in text, text

@@ -23,8 +23,8 @@ from web._frame import rope_pull_estimate, vehicle_states
 from web.palette import VehicleState, state_colors, tension_colors
 
 __all__ = ["EVENT_LOG_LINES", "UiStats", "event_filter_html", "events_html", "position_sources",
-           "rope_legend", "safety_banner_html", "summary_html", "vehicle_table_html",
-           "vehicles_html"]
+           "prearm_banner_html", "rope_legend", "safety_banner_html", "summary_html",
+           "vehicle_table_html", "vehicles_html"]
 
 EVENT_LOG_LINES = 400
 """Lines the events log holds (it scrolls); older ones are counted in the conditions."""
@@ -112,6 +112,7 @@ def summary_html(snap: RuntimeSnapshot | None, *, loop: TickStats | None, contro
     return (
         '<div style="padding:2px 8px;font-size:0.85em;line-height:1.5">'
         f'{safety_banner_html(snap)}{signing_banner_html(unsigned)}{banners_html(snap)}'
+        f'{prearm_banner_html(snap)}'
         f'<div>phase <b data-gcs="phase" style="font-size:1.2em">{snap.phase.text}</b>'
         f' · worst distance error '
         f'<span data-gcs="worst-error">{_num(worst, ".3f", " m")}</span></div>'
@@ -186,6 +187,19 @@ def banners_html(snap: RuntimeSnapshot) -> str:
         f'<div data-gcs-banner="{key}" style="background:{colour};color:#fff;'
         f'font-weight:bold;padding:3px 8px;margin:2px 0;border-radius:3px">'
         f"{html.escape(text)}</div>" for colour, key, text in out)
+
+
+def prearm_banner_html(snap: RuntimeSnapshot) -> str:
+    """While the team is ready: the checks before arming that fail now, one line each
+    naming the vehicle (:meth:`gcs.loop.Prearm.watch`), so the operator sees them before
+    pressing ARM, which would refuse; nothing when they pass."""
+    if not snap.prearm:
+        return ""
+    lines = "".join(f'<div data-gcs="prearm-check" style="font-weight:normal">'
+                    f"{html.escape(text)}</div>" for text in snap.prearm)
+    return (f'<div data-gcs-banner="prearm" style="{_BANNER}#e67e22">ARM WOULD BE REFUSED: '
+            f"{len(snap.prearm)} check{'s' if len(snap.prearm) > 1 else ''} before arming "
+            f"fail{'' if len(snap.prearm) > 1 else 's'}{lines}</div>")
 
 
 _SOURCES = {"shared": "local NED (shared)", "set_origin": "local NED (origin set by GCS)",

@@ -99,6 +99,13 @@ class ParamClient:
         data = struct.pack(fmt, round(value)).ljust(4, b"\x00")
         return float(struct.unpack("<f", data)[0])
 
+    def latest(self, name: str) -> ParamValue | None:
+        """The parameter as last heard (read, set, or sent unasked: an autopilot announces a
+        change another ground station made), without asking; None if never heard."""
+        with self._cond:
+            entry = self._latest.get(name)
+        return None if entry is None else entry[1]
+
     def read(self, name: str) -> ParamValue:
         """The parameter's current value (PARAM_REQUEST_READ); LinkError when unanswered."""
         link = self._link

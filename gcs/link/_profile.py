@@ -161,6 +161,10 @@ class AutopilotProfile(Protocol):
         """The autopilot's tilt limit, degrees (read from :attr:`tilt_limit_param`)."""
         ...
 
+    def known_tilt_limit_deg(self) -> float | None:
+        """The tilt limit as last heard, degrees, without asking (None: not heard yet)."""
+        ...
+
     def set_tilt_limit_deg(self, degrees: float) -> float:
         """Set the tilt limit; the value read back afterwards, degrees."""
         ...
@@ -227,6 +231,14 @@ class ProfileBase:
     def tilt_limit_deg(self) -> float:
         """The autopilot's tilt limit, degrees; LinkError when it does not answer."""
         return self.params.read(self._tilt_param()).value / self.tilt_units_per_deg
+
+    def known_tilt_limit_deg(self) -> float | None:
+        """The tilt limit as last heard (read, set, or announced by the autopilot), degrees;
+        None when not heard yet or there is none. Sends nothing."""
+        if self.tilt_limit_param is None:
+            return None
+        value = self.params.latest(self.tilt_limit_param)
+        return None if value is None else value.value / self.tilt_units_per_deg
 
     def set_tilt_limit_deg(self, degrees: float) -> float:
         """Set the tilt limit (PARAM_SET), read it back; the value read back, degrees."""

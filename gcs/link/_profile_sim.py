@@ -44,6 +44,18 @@ class SimProfile(ProfileBase):
     landing_modes = frozenset({SimMode.LAND.name})
     vertical_is_z = True
     params_bytewise = True  # as PX4: integer parameters travel byte for byte
+    tilt_limit_param = "MPC_TILTMAX_AIR"
+    """The simulator's ``bank_max_deg`` under PX4's name (:mod:`vehicles._params`), degrees.
+
+    Unlike PX4's, it bounds roll and pitch each, not the tilt: a command along a
+    diagonal tilts the vehicle up to ``acos(cos(b)^2)`` (28.0 degrees at 20). The
+    config's ``limits.bank_deg`` is the same kind of bound ("largest roll/pitch
+    angle": the paper's and Paparazzi's), so the two compare as they are, and
+    ``limits.autopilot_tilt: set`` writes the bank limit itself. (A tilt bound, PX4's or
+    ArduPilot's, bounds roll and pitch too, as neither exceeds the tilt: there the same
+    comparison is the stricter one.) Read as a tilt, the shipped 20 degrees would have
+    to be 14.2 to keep a diagonal within 20, and the paper's flight would change.
+    """
     # telemetry_rates_hz stays empty: the simulated vehicles stream position and attitude at
     # 50 Hz of sim time from the start (vehicles._streams), more than the GCS would ask for.
 

@@ -13,15 +13,25 @@ An arm goes ahead only when the GCS can fly what it would arm:
 * no autopilot tilts farther than the config's bank limit (``limits.bank_deg``):
   ArduPilot's ``ANGLE_MAX`` (centidegrees), PX4's ``MPC_TILTMAX_AIR`` (degrees).
   With ``limits.autopilot_tilt: set`` the GCS sets it to the bank limit
-  (PARAM_SET), reads it back and records it as an event instead.
+  (PARAM_SET), reads it back and records it as an event instead. The simulated
+  vehicles answer as PX4, but their ``MPC_TILTMAX_AIR`` bounds roll and pitch
+  each, not the tilt: the same kind of bound as ``limits.bank_deg`` itself (the
+  largest roll/pitch angle), so the two compare as they are
+  (``gcs.link._profile_sim``). A tilt bound is the stricter: neither roll nor
+  pitch exceeds the tilt.
 
 The runtime runs :meth:`Prearm.check` on its action thread before the arm
 command; :class:`PrearmError` ends the arm with every reason in one line (an
-error event on the page; ``gcs fly`` exits with it).
+error event on the page; ``gcs fly`` exits with it). While the team is ready it
+also runs :meth:`Prearm.watch` on its loop thread, about once a second: the
+checks that need no traffic with the vehicles (their positions and origins as
+last heard, the shape, the tilt limits already read), for the page and the
+snapshot, refusing nothing.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
 from concurrent.futures import ThreadPoolExecutor
 
@@ -34,7 +44,11 @@ from gcs.link import AutopilotProfile, LinkError
 from gcs.loop._fleet import FleetState
 from gcs.loop._team_frame import TeamFrame
 
-__all__ = ["Prearm", "PrearmError"]
+__all__ = ["READY_CHECK_PERIOD_S", "Prearm", "PrearmError"]
+
+READY_CHECK_PERIOD_S = 1.0
+"""How often :meth:`Prearm.watch` runs the checks again while the team is ready, s of the
+loop's clock."""
 
 _TILT_SLACK_DEG = 0.01
 """A tilt limit this far above the bank limit still passes (a parameter's rounding), deg."""
@@ -69,6 +83,8 @@ class Prearm:
         self.ids = team.formation.ids
         self.profiles = profiles
         self._note = note if note is not None else (lambda level, text: None)
+        self._watched_at = -math.inf
+        self._watched: tuple[str, ...] = ()
 
     def check(self, read_fleet: Callable[[], FleetState], *, scale: float = 1.0) -> None:
         """Run every check; :class:`PrearmError` with all the reasons if any failed.
@@ -84,13 +100,34 @@ class Prearm:
                  scale: float = 1.0) -> list[str]:
         """Every failed check, one line each (empty: the team may arm)."""
         placing = self.frame.problems()
+        return self._standing(placing, read_fleet(), scale) + self._tilt_limits()
+
+    def known_problems(self, fleet: FleetState, *, scale: float = 1.0) -> list[str]:
+        """The checks that need no traffic with the vehicles, on what the GCS heard already:
+        origins, positions and shape of ``fleet``, and the tilt limits read so far (at an
+        earlier arm, or announced by the autopilot); one line each, as :meth:`problems`
+        says them. Sends nothing and never blocks: the loop's thread may call it. A tilt
+        limit not read yet, or one ``limits.autopilot_tilt: set`` will set, is no
+        failure here."""
+        return (self._standing(self.frame.problems(ask=False), fleet, scale)
+                + self._known_tilt_limits())
+
+    def watch(self, now: float, fleet: FleetState, *, scale: float = 1.0) -> tuple[str, ...]:
+        """:meth:`known_problems` again once :data:`READY_CHECK_PERIOD_S` passed since the
+        last time (``now`` on the loop's clock), else what it found then."""
+        if not 0.0 <= now - self._watched_at < READY_CHECK_PERIOD_S:
+            self._watched = tuple(self.known_problems(fleet, scale=scale))
+            self._watched_at = now
+        return self._watched
+
+    def _standing(self, placing: list[tuple[int, str]], fleet: FleetState,
+                  scale: float) -> list[str]:
+        """The team frame's ``placing`` problems, then positions and shape of ``fleet``."""
         reasons = [text for _vid, text in placing]
         unplaced = {vid for vid, _text in placing}
-        fleet = read_fleet()
         reasons += self._positions(fleet, unplaced)
         if fleet.located:
             reasons += self._shape(fleet, scale)
-        reasons += self._tilt_limits()
         return reasons
 
     def _positions(self, fleet: FleetState, unplaced: set[int]) -> list[str]:
@@ -150,6 +187,24 @@ class Prearm:
             found = list(pool.map(self._tilt_limit, checked))
         return [r for r in found if r is not None]
 
+    def _known_tilt_limits(self) -> list[str]:
+        limits = self.team.config.limits
+        if limits.autopilot_tilt == "set":  # the arm sets them
+            return []
+        out = []
+        for vid in self.ids:
+            tilt = self.profiles[vid].known_tilt_limit_deg()
+            if tilt is not None and tilt > limits.bank_deg + _TILT_SLACK_DEG:
+                out.append(self._tilt_above(vid, tilt))
+        return out
+
+    def _tilt_above(self, vid: int, tilt: float) -> str:
+        bank = self.team.config.limits.bank_deg
+        return (f"vehicle {vid}: its tilt limit {self.profiles[vid].tilt_limit_param} is "
+                f"{tilt:g} degrees, above the config's bank limit of {bank:g} degrees "
+                f"(limits.bank_deg): lower it on the autopilot, or let the GCS set it "
+                f"(limits.autopilot_tilt: set)")
+
     def _tilt_limit(self, vid: int) -> str | None:
         """Vehicle ``vid``'s tilt limit checked (or set); the reason it fails, or None."""
         profile = self.profiles[vid]
@@ -161,10 +216,7 @@ class Prearm:
             if tilt <= bank + _TILT_SLACK_DEG:
                 return None
             if limits.autopilot_tilt != "set":
-                return (f"vehicle {vid}: its tilt limit {param} is {tilt:g} degrees, above the "
-                        f"config's bank limit of {bank:g} degrees (limits.bank_deg): lower it "
-                        f"on the autopilot, or let the GCS set it (limits.autopilot_tilt: "
-                        f"set)")
+                return self._tilt_above(vid, tilt)
             back = profile.set_tilt_limit_deg(bank)
         except LinkError as exc:
             return f"vehicle {vid}: its tilt limit {param} could not be checked: {exc.what}"

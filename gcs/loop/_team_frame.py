@@ -277,18 +277,19 @@ class TeamFrame:
 
     # -- before arming ------------------------------------------------------------------------
 
-    def problems(self) -> list[tuple[int, str]]:
+    def problems(self, *, ask: bool = True) -> list[tuple[int, str]]:
         """What keeps a vehicle out of the team frame: (vehicle, one line naming it) each
         (empty: every vehicle placed). Blocks up to a few seconds: ``set_origin`` sends
         the origin again and asks each vehicle for its own, ``global`` asks those whose
-        origin is missing."""
+        origin is missing. ``ask=False``: from what the vehicles said already, sending
+        nothing and never blocking (the checks shown while the team is ready)."""
         if self.mode == "shared":
             return []
         if self.mode == "set_origin":
-            return self._check_set_origin()
+            return self._check_set_origin(ask=ask)
         with self._lock:
             missing = [v for v in self._vehicles if v.origin is None]
-        if missing:
+        if missing and ask:
             self._ask_origins(missing, since=-math.inf)
         out = []
         with self._lock:
@@ -299,13 +300,14 @@ class TeamFrame:
                                f"cannot be placed in the team frame (team_frame: global)"))
         return out
 
-    def _check_set_origin(self) -> list[tuple[int, str]]:
+    def _check_set_origin(self, *, ask: bool) -> list[tuple[int, str]]:
         origin = self.config.origin
         assert origin is not None
-        since = time.monotonic()
-        for v in self._vehicles:
-            self._send_origin(v)
-        self._ask_origins(self._vehicles, since=since)
+        since = time.monotonic() if ask else -math.inf
+        if ask:
+            for v in self._vehicles:
+                self._send_origin(v)
+            self._ask_origins(self._vehicles, since=since)
         out = []
         with self._lock:
             for v in self._vehicles:
