@@ -9,7 +9,7 @@ import pytest
 
 from gcs.config import OperatorConfig, SafetyConfig, load_team
 from gcs.loop import OperatorCommand
-from gcs.loop._operator import shape_stick
+from gcs.loop._operator import ramp, shape_stick
 from gcs.loop._safety import DEFORMED, LOST, STALE, SafetyReason, evaluate, rule_flags
 
 OP = OperatorConfig(deadzone=0.1, expo=0.5, stick_timeout=1.0, altitude_rate=0.5,
@@ -59,6 +59,28 @@ def test_altitude_is_rate_limited() -> None:
     with pytest.raises(ValueError, match="altitude is not a number"):
         op.reset_altitude(float("inf"), now=20.0)
     assert op.snapshot(21.0).altitude_target == pytest.approx(2.5)  # untouched by the refusals
+
+
+def test_the_pickup_band_is_climbed_and_descended_at_its_slow_rate() -> None:
+    """Lift and set-down (gcs.loop._runtime): the ropes take the weight between 0.8 and
+    1.0 m; the ramp crosses that band at 0.02 m/s and the rest at 0.1 m/s."""
+    band = (0.8, 1.0, 0.02)
+    assert ramp(0.7, 2.0, 1.0, 0.1, band) == pytest.approx(0.8)  # up to the band's edge
+    assert ramp(0.7, 2.0, 2.0, 0.1, band) == pytest.approx(0.82)  # then slowly
+    assert ramp(0.7, 2.0, 1.0 + 10.0 + 1.0, 0.1, band) == pytest.approx(1.1)  # out at full rate
+    assert ramp(1.1, 0.5, 1.0 + 10.0 + 2.0, 0.1, band) == pytest.approx(0.6)  # and down
+    assert ramp(0.9, 0.95, 100.0, 0.1, band) == pytest.approx(0.95)  # never past the target
+    assert ramp(0.7, 2.0, 1.0, 0.1) == pytest.approx(0.8)  # no band: one rate
+    op = OperatorCommand(OP, GUI, now=0.0)
+    op.reset_altitude(0.7, now=0.0)
+    op.set_altitude(1.7, now=0.0, rate=0.1, slow=band)
+    assert op.snapshot(2.0).altitude == pytest.approx(0.82)
+    op.set_altitude(1.7, now=2.0, rate=0.1)  # a new target without a band ends it
+    assert op.snapshot(3.0).altitude == pytest.approx(0.92)
+    with pytest.raises(ValueError, match="altitude rate must be positive"):
+        op.set_altitude(1.7, now=3.0, slow=(0.8, 1.0, 0.0))
+    with pytest.raises(ValueError, match="from low to high"):
+        op.set_altitude(1.7, now=3.0, slow=(1.0, 0.8, 0.02))
 
 
 def test_guidance_off_zeroes_motion() -> None:

@@ -108,6 +108,10 @@ class GuidanceConfig:
     scale_step: float = field(doc="scale change per operator step", default=0.05, gt=0.0)
     hold_compensation: bool = field(
         doc="predict relative positions half a period ahead (see gcs.guidance)", default=True)
+    rope_lag: float = field(
+        doc="the vehicles' autopilots' lag in following an external force, s: while the "
+            "team spins, each setpoint leads the rope's turning pull by it "
+            "(gcs/guidance/_rope_lead.py); 0 turns the lead off", default=0.0, ge=0.0, le=2.0)
 
     @property
     def setpoints_per_tick(self) -> int:
@@ -271,12 +275,30 @@ class FlightConfig:
     lift_rate: float = field(doc="climb and descent rate while lifting and setting down the "
                              "payload, m/s: slow, so the ropes take the load gently",
                              default=0.1, gt=0.0)
+    pickup_rate: float = field(doc="climb and descent rate inside the pickup band, where the "
+                               "ropes take up or give up the payload's weight, m/s: the "
+                               "tension then grows slowly enough for the vehicles' "
+                               "autopilots to hold their places", default=0.02, gt=0.0)
+    pickup_band: tuple[float, float] = field(
+        doc="the pickup band: from this far below to this far above the taut-rope "
+            "altitude, m", default=(0.10, 0.15))
     altitude_tolerance: float = field(doc="an altitude counts as reached within this, m",
                                       default=0.1, gt=0.0)
     takeoff_timeout: float = field(doc="longest take-off before it is declared failed, s",
                                    default=30.0, gt=0.0)
     abort_hold: float = field(doc="after an abort, hold this long before landing, s",
                               default=1.0, ge=0.0)
+
+    def __post_init__(self) -> None:
+        below, above = self.pickup_band
+        if not (math.isfinite(below) and math.isfinite(above) and below >= 0.0
+                and above >= 0.0):
+            raise FieldError("pickup_band", f"[{below:g}, {above:g}]: both heights must be "
+                             "non-negative metres (below and above the taut-rope altitude)")
+        if self.pickup_rate > self.lift_rate:
+            raise FieldError("pickup_rate", f"{self.pickup_rate:g} m/s is faster than "
+                             f"flight.lift_rate ({self.lift_rate:g} m/s): the pickup band is "
+                             "the slow part of the lift")
 
 
 @dataclass(frozen=True)

@@ -22,7 +22,7 @@ import numpy as np
 from gcs.config import GuidanceConfig, OperatorConfig
 from gcs.guidance import MotionDemand
 
-__all__ = ["OperatorCommand", "OperatorSnapshot", "shape_stick"]
+__all__ = ["OperatorCommand", "OperatorSnapshot", "ramp", "shape_stick"]
 
 
 def shape_stick(value: float, *, deadzone: float, expo: float) -> float:
@@ -73,6 +73,7 @@ class OperatorCommand:
         self._alt = 0.0
         self._alt_time = now
         self._alt_rate = operator.altitude_rate
+        self._alt_band: tuple[float, float, float] | None = None  # lo, hi, rate inside
         self._guidance_on = True
 
     def set_sticks(self, forward: float, right: float, rotate: float, *, now: float,
@@ -103,18 +104,30 @@ class OperatorCommand:
             current = self._scale_target
         return self.set_scale(round(current + steps * self._g.scale_step, 6))
 
-    def set_altitude(self, altitude: float, *, now: float, rate: float | None = None) -> float:
-        """Altitude target above the ground, m; followed at ``rate`` m/s (default: config)."""
+    def set_altitude(self, altitude: float, *, now: float, rate: float | None = None,
+                     slow: tuple[float, float, float] | None = None) -> float:
+        """Altitude target above the ground, m; followed at ``rate`` m/s (default: config).
+
+        ``slow = (low, high, rate)``: between the altitudes ``low`` and ``high`` the
+        ramp moves at that slower rate (the band where the ropes take or give up the
+        payload's weight, so the tension changes as slowly as the vehicles can follow).
+        Any later call without it ends the band.
+        """
         if not np.isfinite(altitude):
             raise ValueError(f"operator altitude is not a number: {altitude}")
-        if rate is not None and not rate > 0.0:  # NaN included: it would skip the ramp
-            raise ValueError(f"operator altitude rate must be positive, got {rate}")
+        for value in (rate,) + ((slow[2],) if slow is not None else ()):
+            if value is not None and not value > 0.0:  # NaN included: it would skip the ramp
+                raise ValueError(f"operator altitude rate must be positive, got {value}")
+        if slow is not None and not slow[0] <= slow[1]:
+            raise ValueError(f"operator slow band must run from low to high, got {slow[:2]}")
         with self._lock:
             self._advance(now)
             self._alt_target = float(np.clip(altitude, self._cfg.altitude_min,
                                              self._cfg.altitude_max))
             self._alt_rate = self._cfg.altitude_rate if rate is None else min(
                 rate, self._cfg.altitude_rate)
+            self._alt_band = None if slow is None else (
+                float(slow[0]), float(slow[1]), min(float(slow[2]), self._alt_rate))
             return self._alt_target
 
     def step_altitude(self, steps: int, *, now: float) -> float:
@@ -130,6 +143,7 @@ class OperatorCommand:
         with self._lock:
             self._alt = self._alt_target = float(altitude)
             self._alt_time = now
+            self._alt_band = None
 
     def set_guidance(self, on: bool) -> None:
         """Switch the formation motion on or off (off: the team holds its shape)."""
@@ -145,9 +159,7 @@ class OperatorCommand:
 
     def _advance(self, now: float) -> None:
         dt = max(0.0, now - self._alt_time)
-        step = self._alt_rate * dt
-        # plain floats: a numpy call on a scalar costs tens of us in the 4 Hz loop (cold)
-        self._alt += min(max(self._alt_target - self._alt, -step), step)
+        self._alt = ramp(self._alt, self._alt_target, dt, self._alt_rate, self._alt_band)
         step = self._cfg.scale_rate * dt
         self._scale += min(max(self._scale_target - self._scale, -step), step)
         self._alt_time = now
@@ -167,3 +179,32 @@ class OperatorCommand:
                                     altitude_target=self._alt_target,
                                     scale_target=self._scale_target,
                                     guidance_on=self._guidance_on, source=self._source)
+
+
+def ramp(value: float, target: float, dt: float, rate: float,
+         slow: tuple[float, float, float] | None = None) -> float:
+    """``value`` moved towards ``target`` for ``dt`` s at ``rate``, and at the slow band's
+    rate while it is inside the band ``(low, high, rate)``.
+
+    Plain floats: a numpy call on a scalar costs tens of us in the 4 Hz loop (cold).
+    """
+    if slow is None:
+        step = rate * dt
+        return value + min(max(target - value, -step), step)
+    low, high, slow_rate = slow
+    up = target > value
+    while dt > 0.0 and value != target:
+        inside = low <= value < high if up else low < value <= high
+        # the next place the rate changes: a band edge ahead, or the target
+        if up:
+            edge = low if value < low else (high if value < high else math.inf)
+            stop = min(edge, target)
+        else:
+            edge = high if value > high else (low if value > low else -math.inf)
+            stop = max(edge, target)
+        speed = slow_rate if inside else rate
+        reach = abs(stop - value) / speed
+        if reach >= dt:
+            return value + (speed * dt if up else -speed * dt)
+        value, dt = stop, dt - reach
+    return value

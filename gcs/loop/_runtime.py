@@ -42,10 +42,17 @@ from typing import Protocol
 
 import numpy as np
 
-from gcs.analysis import Analysis, a_safe_span, analyze
+from gcs.analysis import Analysis, NoHangingPointError, a_safe_span, analyze, desired_load
 from gcs.config import Team
 from gcs.formation import fit_rotation
-from gcs.guidance import Guidance, MotionDemand, finite_max_norm, saturate
+from gcs.guidance import (
+    Guidance,
+    MotionDemand,
+    finite_max_norm,
+    rope_pull_ned,
+    rope_turn_lead,
+    saturate,
+)
 from gcs.link import AutopilotProfile, Fanout, LinkError
 from gcs.loop._clock import Clock, ClockStoppedError
 from gcs.loop._deformation import Deformation, DeformationPolicy
@@ -140,6 +147,7 @@ class RuntimeSnapshot:
     fence: FenceVerdict | None = None  # what the geofence did (None: not applied)
     recovery: str = ""  # vehicles waiting to be re-engaged, and when (empty: none)
     shape: Deformation = Deformation.NONE  # what a team deformed beyond the bound does
+    prearm: tuple[str, ...] = ()  # ready: the checks before arming failing now (Prearm.watch)
 
 
 _GAP_S = 0.3
@@ -274,6 +282,7 @@ class Runtime:
         """Where each vehicle's local frame lies in the team frame the fleet table reads in."""
         self.prearm = Prearm(team, self.analysis, self.team_frame, profiles, note=self.note)
         """The checks an arm must pass."""
+        self._rope_pull: tuple[float, np.ndarray] | None = None  # scale, (n, 2) body-frame pulls
 
     # -- state ---------------------------------------------------------------------------
 
@@ -362,10 +371,12 @@ class Runtime:
             # reached and end the phase at once
             scale = self.operator.snapshot(self.clock.now()).demand.scale
             base = self.taut_altitude(scale)
-            height = base + (self.team.config.flight.lift_height if action is Action.LIFT
-                             else -self.team.config.flight.takeoff_slack)
-            self.operator.set_altitude(height, now=self.clock.now(),
-                                       rate=self.team.config.flight.lift_rate)
+            flight = self.team.config.flight
+            height = base + (flight.lift_height if action is Action.LIFT
+                             else -flight.takeoff_slack)
+            below, above = flight.pickup_band
+            self.operator.set_altitude(height, now=self.clock.now(), rate=flight.lift_rate,
+                                       slow=(base - below, base + above, flight.pickup_rate))
             self._set_phase(target)
             return
         if not self._action_busy.acquire(blocking=False):
@@ -532,7 +543,8 @@ class Runtime:
                 fence = self._fence(fleet, demand)
                 demand = fence.demand
             accel, self._accel_last = self._stream(
-                fleet, demand, op, hold=self._shape in (Deformation.HOLD, Deformation.LAND))
+                fleet, demand, op, hold=self._shape in (Deformation.HOLD, Deformation.LAND),
+                carrying=phase is Phase.FORMATION)
             self._streamed, self._streamed_at = accel, now
             self._advance(phase, op, now, fleet)
         else:
@@ -559,7 +571,9 @@ class Runtime:
                                compute_time=self._compute[-1], compute_cpu=cpu,
                                events=self.events()[-20:],
                                truth=truth, moving=moving, fence=fence,
-                               recovery=self.recovery.status(now), shape=self._shape)
+                               recovery=self.recovery.status(now), shape=self._shape,
+                               prearm=self.prearm.watch(now, fleet, scale=op.demand.scale)
+                               if phase is Phase.READY else ())
         self._snapshot = snap
         # Lockstep: the phase actions and a scenario act now, while the sim stands still
         # at this tick's time; their effects show in the next tick.
@@ -583,20 +597,46 @@ class Runtime:
             self._set_phase(Phase.READY)
 
     def _stream(self, fleet: FleetState, demand: MotionDemand, op: OperatorSnapshot, *,
-                hold: bool = False) -> tuple[np.ndarray, float]:
+                hold: bool = False, carrying: bool = False) -> tuple[np.ndarray, float]:
         """Guidance and one setpoint per vehicle (errors are per vehicle): the accelerations
-        sent and the largest one's norm. ``hold``: each vehicle holds where it was."""
+        sent and the largest one's norm. ``hold``: each vehicle holds where it was;
+        ``carrying``: the payload hangs from the ropes (the spin's rope lead applies)."""
         if hold:
             accel = self._damping(fleet, self.deformation.hold_points)
             largest = finite_max_norm(accel)
         elif fleet.located:
             accel = self.guidance.accelerations(fleet.p_ned[:, :2], fleet.v_ned[:, :2],
                                                 fleet.yaw, demand)
+            if carrying:
+                accel = self._rope_lead(fleet, demand, accel)
             largest = finite_max_norm(accel)  # what the guidance could not compute becomes 0
         else:  # cannot place every vehicle: hold still horizontally
             accel, largest = np.zeros((fleet.n, 2)), 0.0
         self._send_all(accel, z_ned=-self._altitude(op))
         return accel, largest
+
+    def _rope_lead(self, fleet: FleetState, demand: MotionDemand,
+                   accel: np.ndarray) -> np.ndarray:
+        """``accel`` plus the lead of the rope's pull turning with a spinning team
+        (gcs/guidance/_rope_lead.py), saturated again; unchanged when not spinning."""
+        lag = self.team.config.guidance.rope_lag
+        omega = self.guidance.angular_rate(demand)
+        if lag <= 0.0 or omega == 0.0:
+            return accel
+        scale = demand.scale
+        if self._rope_pull is None or self._rope_pull[0] != scale:
+            try:
+                pull = desired_load(self.team, scale=scale).force_ned[:, :2]
+            except NoHangingPointError:  # ropes too short to hang it: nothing to lead
+                pull = np.zeros((fleet.n, 2))
+            self._rope_pull = (scale, np.ascontiguousarray(pull))
+        heading = fit_rotation(scale * self.team.formation.positions, fleet.p_ned[:, :2])
+        if heading is None:
+            return accel
+        lead = rope_turn_lead(rope_pull_ned(self._rope_pull[1], heading), omega, lag,
+                              self.team.config.airframe.mass)
+        lim = self.team.config.limits
+        return saturate(accel + lead, norm_max=lim.accel_norm, axis_max=lim.accel_axis)
 
     def _follow_link_delay(self) -> None:
         """The guidance predicts the distance errors half a period ahead, the hold's delay;
@@ -878,6 +918,8 @@ class Runtime:
                 self._event("error", f"loop stopped: {exc}")
                 return
             now = self.clock.now()
+            if k == 0:  # the schedule starts at the clock's first time (a simulator's first
+                start = due = now  # sample, whether it came before the loop started or not)
             late = now - due
             self._stall_max = max(self._stall_max, late)
             if late > self.period:

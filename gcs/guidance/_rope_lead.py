@@ -1,0 +1,37 @@
+"""The rope's pull turning with a spinning team, led by the autopilot's lag.
+
+Why: each carrying vehicle's autopilot cancels the rope's horizontal pull
+``F`` through its acceleration loop, which follows an external force with a
+lag ``tau`` (filters, attitude loop, rotors). While the team spins at
+``omega`` about the down axis, ``F`` turns with it, ``dF/dt = omega z x F``,
+and the autopilot is left ``tau dF/dt / m`` short, against the turn. At the
+paper's 0.4 rad/s on the square that is about 0.13 m/s^2 per vehicle: the
+team turned at a third of the commanded rate while the guidance's centripetal
+feed-forward, sized for the commanded rate, pulled the shape in (0.17 m).
+Adding ``tau omega z x F / m`` to each setpoint cancels it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["rope_pull_ned", "rope_turn_lead"]
+
+
+def rope_pull_ned(pull_body: np.ndarray, heading: float) -> np.ndarray:
+    """(n, 2) horizontal rope pulls in NED from the team's body frame (x forward, y
+    right), with the team turned ``heading`` rad from north towards east."""
+    c, s = math.cos(heading), math.sin(heading)
+    x, y = pull_body[:, 0], pull_body[:, 1]
+    return np.stack([c * x - s * y, s * x + c * y], axis=1)
+
+
+def rope_turn_lead(pull_ned: np.ndarray, omega: float, lag: float,
+                   mass: float) -> np.ndarray:
+    """(n, 2) acceleration, m/s^2, that cancels an autopilot's lag ``lag`` (s) behind
+    the horizontal rope pulls ``pull_ned`` (n, 2, N) turning at ``omega`` (rad/s,
+    clockwise seen from above) on vehicles of ``mass`` kg."""
+    k = lag * omega / mass
+    return np.stack([-k * pull_ned[:, 1], k * pull_ned[:, 0]], axis=1)
