@@ -104,3 +104,22 @@ def test_the_spin_keeps_the_shape_with_the_rope_lead(square: Team) -> None:
     led = _spin(square)
     unled = _spin(_with(square, "guidance", rope_lag=0.0))
     assert led < 0.8 * unled, (led, unled)  # paper flight, seeds 1-4: 0.13 against 0.17 m
+
+
+def test_the_team_takes_off_below_its_shortest_rope(square: Team) -> None:
+    """With ropes of their own lengths the first to go taut is the shortest: the take-off
+    stops ``flight.takeoff_slack`` below it, with every rope still slack."""
+    ropes = (1.0, 1.118, 1.118, 1.118)
+    uneven = _with(square, "payload", rope_lengths=ropes, mass=0.1)  # analysis passes
+    first = math.sqrt(1.0 - 0.5)  # 1 m rope, 0.707 m from the centroid
+    assert uneven.taut_altitude() == pytest.approx(first, abs=1e-3)
+    assert square.taut_altitude() == pytest.approx(math.sqrt(1.25 - 0.5))
+    with SimTeam(uneven, seed=1) as flight:
+        flight.arm()
+        flight.takeoff()
+        flight.wait(2)
+        state = flight.state()
+        assert float(np.mean(-state.p_ned[:, 2])) == pytest.approx(
+            first - uneven.config.flight.takeoff_slack, abs=0.1)
+        tension = state.rope_tension
+        assert tension is not None and float(tension.max()) == 0.0

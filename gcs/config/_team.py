@@ -341,6 +341,11 @@ class Team:
     formation: Formation
     source: str
 
+    def taut_altitude(self, scale: float = 1.0) -> float:
+        """Vehicle altitude at which the first rope becomes taut, with the shape at ``scale``
+        and the payload on the ground under the centroid, m (each rope its own length)."""
+        return _taut_altitude(self.config, self.formation, scale)
+
     def without_signing(self) -> Team:
         """This team with the team key off (``--insecure``): its simulated links unsigned."""
         gcs = dataclasses.replace(self.config.gcs, signing=False)
@@ -450,7 +455,7 @@ def _check_ropes(cfg: TeamConfig, n_vehicles: int, source: str) -> None:
 
 def _taut_altitude(cfg: TeamConfig, formation: Formation, scale: float) -> float:
     """Vehicle altitude at which the first rope becomes taut, payload on the ground at the
-    centroid (with ropes of one length, the loop's ``Runtime.taut_altitude``), m."""
+    centroid (:meth:`Team.taut_altitude`), m."""
     ropes = np.asarray(cfg.payload.lengths(formation.n))
     r = scale * formation.radii
     return float(np.sqrt(np.maximum(ropes**2 - r**2, 0.0)).min())

@@ -325,10 +325,9 @@ class Runtime:
                                  a.rope_pull_bound, cfg.payload.rope_length)
 
     def taut_altitude(self, scale: float) -> float:
-        """Vehicle altitude at which the ropes become taut with the payload on the ground, m."""
-        cfg = self.team.config
-        r = scale * float(self.team.formation.radii.max())
-        return math.sqrt(max(cfg.payload.rope_length**2 - r**2, 0.0))
+        """Vehicle altitude at which the first rope becomes taut with the payload on the
+        ground, m (:meth:`gcs.config.Team.taut_altitude`: each rope its own length)."""
+        return self.team.taut_altitude(scale)
 
     def note(self, level: str, text: str) -> None:
         """Add an event from outside the loop (link presence, UI, gamepad): shown and logged."""
