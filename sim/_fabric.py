@@ -51,7 +51,7 @@ from gcs.wire import (
     SigningKey,
     SimTruth,
     Unsealer,
-    decode_time,
+    decode_ack,
     encode_clock,
     keys,
 )
@@ -115,6 +115,9 @@ class HostFabric:
         self._fleet = keys.check_fleet(fleet)
         self._sysids = tuple(sysids)
         self._announce_sent = announce_sent
+        self.partner: int | None = None
+        """Lockstep: partner id of the GCS whose acks the host follows, named in every clock
+        sample once set (:mod:`gcs.wire._clockwire`)."""
         self._sent = [0] * len(self._sysids)
         self._truth_sent = 0
         self._sent_lock = threading.Lock()  # receive threads send echoes, the loop telemetry
@@ -194,7 +197,8 @@ class HostFabric:
             return
         with self._sent_lock:
             sent = dict(zip(self._sysids, self._sent, strict=True))
-        self._clock.put(self._seal_clock.seal(encode_clock(t, self._truth_sent, sent)))
+        self._clock.put(self._seal_clock.seal(encode_clock(t, self._truth_sent, sent,
+                                                           self.partner)))
 
     def publish_truth(self, truth: SimTruth) -> None:
         """Publish one ground-truth sample."""
@@ -227,7 +231,7 @@ class HostFabric:
             self.refusals.refuse("clock ack", f"{len(sample.payload)} bytes, more than {limit}")
             return
         try:
-            inbox.put(ClockAck(decode_time(self._open_ack.open(data))))
+            inbox.put(ClockAck(*decode_ack(self._open_ack.open(data))))
         except ValueError as exc:  # SealError is one
             self.refusals.refuse("clock ack", str(exc))
 

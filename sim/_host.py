@@ -318,10 +318,19 @@ class SimHost:
             if self._status[event.index] is VehicleStatus.LIVE:
                 self._endpoints[event.index].apply(event.inbound, self.t)
         elif isinstance(event, ClockAck):
+            partner = self._fabric.partner
             if event.t > self.t + ACK_MAX_LEAD_S:  # a GCS acks times it was sent
                 self._refusals.refuse("clock ack", f"for t = {event.t:g} s, far ahead of the "
                                                    f"sim's {self.t:g} s")
+            elif partner is not None and event.partner != partner:
+                # one partner: on two GCSs' acks the sim would run on the later one's ticks
+                self._refusals.refuse("clock ack", f"from a second GCS (partner "
+                                      f"{event.partner:08x}; following {partner:08x})")
             else:
+                if partner is None and self._options.lockstep:
+                    self._fabric.partner = event.partner  # named on the clock from now on
+                    _log.info("in lockstep with GCS %08x from t = %.3f s", event.partner,
+                              self.t)
                 self._acked = max(self._acked, event.t)
         elif isinstance(event, ControlMessage):
             self._controls.append(event.data)

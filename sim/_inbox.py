@@ -47,9 +47,10 @@ class Received:
 
 @dataclass(frozen=True, slots=True)
 class ClockAck:
-    """A lockstep GCS has finished its tick for sim time ``t`` (s)."""
+    """A lockstep GCS (partner id ``partner``) has finished its tick for sim time ``t`` (s)."""
 
     t: float
+    partner: int
 
 
 @dataclass(frozen=True, slots=True)

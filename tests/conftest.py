@@ -1,4 +1,5 @@
-"""What several test files share: the ``gcs`` command line and one recorded short flight."""
+"""What several test files share: the ``gcs`` command line, one recorded short flight and a
+second host."""
 
 from __future__ import annotations
 
@@ -8,9 +9,12 @@ import shutil
 import subprocess
 import sys
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+
+from gcs.testing import Host, NetnsUnavailableError
 
 SQUARE = "configs/bebop_square.yaml"
 SHORT = "configs/scenarios/short_flight.yaml"
@@ -26,6 +30,18 @@ def pytest_configure(config: pytest.Config) -> None:
 
 def pytest_unconfigure(config: pytest.Config) -> None:
     shutil.rmtree(_CONFIG_HOME, ignore_errors=True)
+
+
+@pytest.fixture
+def other_host() -> Iterator[Host]:
+    """A second host (a network namespace); the test is skipped, saying why, where this
+    machine cannot make one."""
+    try:
+        host = Host()
+    except NetnsUnavailableError as exc:
+        pytest.skip(f"no second host on this machine: {exc}")
+    with host:
+        yield host
 
 
 def run_gcs(*args: str, timeout: float = 300) -> subprocess.CompletedProcess[str]:

@@ -73,7 +73,8 @@ def test_a_follower_adopts_only_the_real_clock_and_counts_the_rest(
                     continue
             assert len(data) <= CLOCK_MAX_BYTES
             assert math.isfinite(sample.t) and sample.t >= 0.0
-            assert len(data) in (8, 12 + 5 * len(sample.sent))
+            entries = len(sample.sent) + (sample.partner is not None)  # partner: system id 0
+            assert len(data) in (8, 12 + 5 * entries)
             last, bound, refused = guard.last, guard.bound, guard.refused
             assert last is not None
             verdict = guard.check(sample.t)

@@ -1,33 +1,20 @@
 """Across two hosts over a telemetry radio's link: the simulator in a network namespace of its
 own, the GCS here, 100 ms each way and 5 % loss between them (gcs.testing).
 
-Real time (a paced simulator: lockstep across hosts is not offered yet), so the
-flight takes as long as it flies; what it checks is that the team keeps flying
-through the delays and stalls, not how fast the machine is.
+Real time (a paced simulator: the slow lossy link is the subject here; lockstep across
+hosts is tests/test_fly_connect_lockstep.py), so the flight takes as long as it flies;
+what it checks is that the team keeps flying through the delays and stalls, not how
+fast the machine is.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-
-import pytest
-
 from gcs.app import SimProcess, fly, free_tcp_port, load_scenario
 from gcs.config import load_team
-from gcs.testing import Host, LossyRelay, NetnsUnavailableError
+from gcs.testing import Host, LossyRelay
 
 TEAM = load_team("configs/bebop_square.yaml")
 SHORT = load_scenario("configs/scenarios/short_flight.yaml")
-
-
-@pytest.fixture
-def other_host() -> Iterator[Host]:
-    try:
-        host = Host()
-    except NetnsUnavailableError as exc:
-        pytest.skip(f"no second host on this machine: {exc}")
-    with host:
-        yield host
 
 
 def test_the_short_flight_completes_across_hosts_over_a_lossy_slow_link(

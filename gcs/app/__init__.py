@@ -17,6 +17,8 @@ Modules:
                      the gamepad.
     ``_seeds``       Flights of many seeds in parallel: one lockstep flight per simulator
                      seed, N at a time.
+    ``_simjoin``     Joining a running simulator (``gcs fly --connect``): lockstep or not,
+                     and whether it is sound.
     ``_simprocess``  Start the simulated team (``python -m sim``) as a child process and
                      wait until it is up.
     ``_verify``      ``gcs analyze --verify``: fly the team in the simulator and hold the

@@ -5,6 +5,9 @@ team config; they differ only in where the vehicles are and which clock runs.
 With ``sim_clock`` the loop follows the simulator's clock (and, with
 ``lockstep``, acknowledges every tick so the simulator never runs ahead of the
 guidance: a headless flight is then deterministic and as fast as the machine).
+Joining a simulator started elsewhere, the GCS reads from its clock whether it
+is in lockstep (:mod:`gcs.app._simjoin`); a lockstep simulator follows one GCS,
+its partner, and one that names another stops this GCS's clock.
 """
 
 from __future__ import annotations
@@ -12,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import gc
+import secrets
 import sys
 import threading
 import time
@@ -21,6 +25,7 @@ from pathlib import Path
 import zenoh
 
 from gcs.analysis import analyze, safe_guidance
+from gcs.app._simjoin import ClockProbe
 from gcs.common import join_thread
 from gcs.config import Team, seal_key
 from gcs.flightlog import TlogRecorder
@@ -41,6 +46,7 @@ from gcs.wire import (
     SEAL_OVERHEAD,
     TRUTH_MAX_BYTES,
     ClockGuard,
+    ClockSample,
     ClockVerdict,
     MavlinkEncoder,
     MavMessage,
@@ -49,7 +55,7 @@ from gcs.wire import (
     SimTruth,
     Unsealer,
     decode_clock,
-    encode_time,
+    encode_ack,
     keys,
     mavlink,
 )
@@ -143,14 +149,17 @@ class GcsApp:
         team: the loaded team.
         zenoh_settings: how to join zenoh (default: the team's ``gcs.zenoh``).
         sim_clock: follow the simulator's clock instead of the wall clock.
-        lockstep: acknowledge each tick on the sim clock (with ``sim_clock``).
+        lockstep: acknowledge each tick on the sim clock (with ``sim_clock``); None: if
+            the simulator's clock says it is in lockstep, as a GCS joining a simulator
+            started elsewhere does (refused at once, a ConfigError on ``--connect``, where
+            that cannot be sound: :class:`gcs.app._simjoin.ClockProbe`).
         record: .tlog file to record to, or None.
         override_analysis: fly although ``gcs analyze`` refuses the team (a warning event
             names every violation).
     """
 
     def __init__(self, team: Team, *, zenoh_settings: ZenohSettings | None = None,
-                 sim_clock: bool = False, lockstep: bool = False,
+                 sim_clock: bool = False, lockstep: bool | None = False,
                  record: str | Path | None = None, override_analysis: bool = False) -> None:
         cfg = team.config
         self.team = team
@@ -177,11 +186,23 @@ class GcsApp:
         self.clock: Clock
         self._ack: zenoh.Publisher | None = None
         self._last_ack: bytes | None = None
+        self._probe: ClockProbe | None = None  # joining: the first clock samples
+        self._partner = secrets.randbits(32) or 1  # lockstep: this GCS's id in its acks
+        self._partnered = True  # lockstep: the simulator names no other partner
         if sim_clock:
             ext = ExternalClock(timeout=SIM_CLOCK_TIMEOUT_S)
+            self.clock = ext
+            if lockstep is None:
+                self._probe = ClockProbe(", ".join(settings.connect) or "the zenoh fabric")
             self._subs.append(self.session.declare_subscriber(keys.clock(self.fleet),
                                                               self._on_clock))
-            self.clock = ext
+            if self._probe is not None:
+                try:
+                    lockstep = self._probe.judge()
+                except BaseException:
+                    self.session.close()
+                    raise
+                self._probe = None
             if lockstep:
                 self._ack = self.session.declare_publisher(
                     keys.clock_ack(self.fleet), congestion_control=zenoh.CongestionControl.BLOCK,
@@ -249,27 +270,24 @@ class GcsApp:
                 return
         self.runtime.note(level, text)
 
+    @property
+    def lockstep(self) -> bool:
+        """Whether this GCS acknowledges every tick of the simulator's clock."""
+        return self._ack is not None
+
     def _on_clock(self, sample: zenoh.Sample) -> None:
         if getattr(self, "runtime", None) is None:
+            probe = self._probe
+            if probe is not None:  # joining: what kind of simulator is it?
+                clock = self._read_clock(sample)
+                if clock is not None:
+                    probe.add(clock)
             return  # still being built (no links yet): the sim repeats its clock anyway
-        data = bounded_payload(sample, CLOCK_MAX_BYTES + SEAL_OVERHEAD)
-        try:
-            if data is None:
-                raise ValueError(f"{len(sample.payload)} bytes")
-            data = self._open_clock.open(data)
-        except SealError as exc:
-            # Anyone can publish on the clock key: without the team key's seal a sample
-            # is a stranger's, and never moves the clock.
-            self.clock_refused += 1
-            self._note_refused_clock(None, self._clock_guard.last, str(exc))
+        clock = self._read_clock(sample)
+        if clock is None or not self._partnered:
             return
-        except ValueError:
-            self.clock_errors += 1
-            return
-        try:
-            clock = decode_clock(data)
-        except ValueError:
-            self.clock_errors += 1
+        if self._ack is not None and clock.partner not in (None, self._partner):
+            self._not_the_partner(clock.partner)
             return
         t = clock.t
         assert isinstance(self.clock, ExternalClock)
@@ -295,6 +313,39 @@ class GcsApp:
             self._ack.put(self._seal_ack.seal(self._last_ack))
         self.clock.advance(t)
 
+    def _read_clock(self, sample: zenoh.Sample) -> ClockSample | None:
+        """The clock sample in ``sample``, or None (counted) if refused or malformed."""
+        data = bounded_payload(sample, CLOCK_MAX_BYTES + SEAL_OVERHEAD)
+        try:
+            if data is None:
+                raise ValueError(f"{len(sample.payload)} bytes")
+            data = self._open_clock.open(data)
+        except SealError as exc:
+            # Anyone can publish on the clock key: without the team key's seal a sample
+            # is a stranger's, and never moves the clock.
+            self.clock_refused += 1
+            self._note_refused_clock(None, self._clock_guard.last, str(exc))
+            return None
+        except ValueError:
+            self.clock_errors += 1
+            return None
+        try:
+            return decode_clock(data)
+        except ValueError:
+            self.clock_errors += 1
+            return None
+
+    def _not_the_partner(self, partner: int) -> None:
+        """The lockstep simulator follows another GCS's acks: stop, naming why (flying on,
+        this GCS would command the vehicles beside the one the simulator follows)."""
+        self._partnered = False
+        why = (f"the simulator is in lockstep with another GCS (partner {partner:08x}, this "
+               f"one {self._partner:08x}), and a lockstep simulator follows one GCS: give "
+               f"each flight a simulator of its own")
+        self._note("error", why)
+        assert isinstance(self.clock, ExternalClock)
+        self.clock.close(why)
+
     def _note_refused_clock(self, t: float | None, last: float | None, why: str) -> None:
         """An event for the first refused clock sample, then at most one per period."""
         now = time.monotonic()
@@ -316,8 +367,9 @@ class GcsApp:
         """
         assert self._ack is not None
         self._echo.wait(ECHO_WAIT)
-        self._last_ack = encode_time(t)
-        self._ack.put(self._seal_ack.seal(self._last_ack))
+        self._last_ack = encode_ack(t, self._partner)
+        if self._partnered:
+            self._ack.put(self._seal_ack.seal(self._last_ack))
 
     def _on_truth(self, sample: zenoh.Sample) -> None:
         data = bounded_payload(sample, TRUTH_MAX_BYTES + SEAL_OVERHEAD)

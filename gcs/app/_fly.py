@@ -108,7 +108,9 @@ class HeadlessFlight:
         connect: zenoh endpoint of a running simulator to join instead of starting one.
         seed: of the started simulator's sensor noise and gusts.
         override_analysis: fly although ``gcs analyze`` refuses the team.
-        lockstep: acknowledge every tick of the simulator started here.
+        lockstep: acknowledge every tick of the simulator started here, or of the one
+            joined if it was started with ``--lockstep`` (refused at once where that
+            cannot be sound: :mod:`gcs.app._simjoin`).
         say: gets the line on how the team is signed (the key is made before the sim).
         ready_timeout: longest wait for the simulator started here to come up, s.
     """
@@ -140,6 +142,10 @@ class HeadlessFlight:
                                   lockstep=lockstep, signing=team.config.gcs.signing,
                                   extra=("--seed", str(seed)), ready_timeout=ready_timeout)
         else:
+            if speed is not None:
+                raise ConfigError("--speed", "", f"paces a simulator started here; the one "
+                                  f"joined at {connect} runs at its own --speed "
+                                  f"(python -m sim --speed): leave it out")
             self.endpoint = connect
         if self.endpoint is not None:
             # a simulator elsewhere is joined as the team file says (TLS across machines);
@@ -156,7 +162,9 @@ class HeadlessFlight:
         self._player: int | None = None  # the thread that plays
         try:
             self.app = GcsApp(team, zenoh_settings=settings, sim_clock=not self.real,
-                              lockstep=lockstep and self.sim is not None, record=record,
+                              # joined: in lockstep if the simulator is (its clock says)
+                              lockstep=None if connect is not None and lockstep
+                              else lockstep and self.sim is not None, record=record,
                               override_analysis=override_analysis)
         except BaseException:
             if self.sim is not None:
@@ -196,13 +204,14 @@ class HeadlessFlight:
     def control(self, payload: bytes) -> str:
         """Send ``payload``, sealed with the team key, on the simulator's control key (a
         fault injected on purpose: ``sim._faults``); returns the simulator's answer
-        (``queued``, or why it refused it), or ``sent`` to a simulator joined; RuntimeError
-        on real vehicles.
+        (``queued``, or why it refused it), or ``sent`` to a free-running simulator
+        joined; RuntimeError on real vehicles.
 
-        To the simulator started here it goes as a query, answered once the message is
-        queued: sent by the playing thread in lockstep, it is then ahead of the tick's
-        ack, so it acts at this tick's sim time on every run (a put could be overtaken
-        by the ack: zenoh runs each subscriber on a thread of its own).
+        To the simulator started here (or one joined in lockstep) it goes as a query,
+        answered once the message is queued: sent by the playing thread in lockstep, it
+        is then ahead of the tick's ack, so it acts at this tick's sim time on every run
+        (a put could be overtaken by the ack: zenoh runs each subscriber on a thread of its
+        own).
         """
         if self.real:
             raise RuntimeError("faults are injected into the simulator: not available on "
@@ -212,7 +221,7 @@ class HeadlessFlight:
             key = seal_key(self.team.config.gcs, Path(self.team.source).parent)
             self._sealer = Sealer(key, topic)
         sealed = self._sealer.seal(payload)
-        if self.sim is None:
+        if self.sim is None and not self.app.lockstep:
             self.app.session.put(topic, sealed)
             return "sent"
         for reply in self.app.session.get(topic, payload=sealed, timeout=CONTROL_ANSWER_S):

@@ -58,7 +58,7 @@ class ExternalClock:
         self._t = 0.0
         self._cond = threading.Condition()
         self._timeout = timeout
-        self._closed = False
+        self._closed: str | None = None  # why the clock was closed
         self._started = False  # a sample came
 
     def advance(self, t: float) -> None:
@@ -71,9 +71,11 @@ class ExternalClock:
                 self._started = True
                 self._cond.notify_all()
 
-    def close(self) -> None:
+    def close(self, reason: str = "the simulator clock was closed") -> None:
+        """Stop the clock: every ``sleep_until`` raises :class:`ClockStoppedError` with
+        ``reason`` (the first one given)."""
         with self._cond:
-            self._closed = True
+            self._closed = self._closed or reason
             self._cond.notify_all()
 
     def now(self) -> float:
@@ -84,7 +86,7 @@ class ExternalClock:
         with self._cond:
             while self._t < t or not self._started:
                 if self._closed:
-                    raise ClockStoppedError("the simulator clock was closed")
+                    raise ClockStoppedError(self._closed)
                 if not self._cond.wait(self._timeout):
                     raise ClockStoppedError(f"no simulator clock sample for {self._timeout:g} s "
                                        f"(stuck at t = {self._t:.3f} s)")

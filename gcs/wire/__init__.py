@@ -35,11 +35,15 @@ Modules:
 
 from gcs.common import lazy_modules
 from gcs.wire._clockwire import (
+    ACK_FORMAT,
     CLOCK_MAX_BYTES,
     ClockGuard,
+    ClockSample,
     ClockVerdict,
+    decode_ack,
     decode_clock,
     decode_time,
+    encode_ack,
     encode_clock,
     encode_time,
 )
@@ -114,6 +118,7 @@ from gcs.wire._telemetry import (
 from gcs.wire._unpack import unpack_v2
 
 __all__ = [
+    "ACK_FORMAT",
     "CLOCK_MAX_BYTES",
     "CUSTOM_MODE_ENABLED",
     "DEFAULT_GCS_COMPONENT_ID",
@@ -128,6 +133,7 @@ __all__ = [
     "AccelSetpoint",
     "Attitude",
     "ClockGuard",
+    "ClockSample",
     "ClockVerdict",
     "CommandResult",
     "CopterMode",
@@ -160,10 +166,12 @@ __all__ = [
     "command_name",
     "copter_mode_text",
     "crc_accumulate",
+    "decode_ack",
     "decode_clock",
     "decode_time",
     "distinct_rows",
     "ecef_to_geodetic",
+    "encode_ack",
     "encode_clock",
     "encode_time",
     "frame_crc",

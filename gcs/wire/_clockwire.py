@@ -16,6 +16,14 @@ telemetry and truth sent before it; with the counts, a GCS can wait until it
 holds everything sent up to that time, and a headless flight sees the same
 data at each tick on every run.
 
+A lockstep sim follows one GCS, its partner: the first whose ack it took. A
+GCS's ack is 12 bytes: the time (float64) and the GCS's partner id (uint32,
+drawn at random by each GCS, never 0); an ack of the time alone (8 bytes) is
+partner 0's. Once bound, the sim's clock samples name the partner as an entry
+of system id 0 (no vehicle has it) holding the partner id. Why: a second GCS
+joining the same simulator reads that it is not the partner and stops instead
+of flying the vehicles beside the first.
+
 Anyone on the zenoh fabric can publish a clock sample, so a follower checks
 each one against the time it follows (:class:`ClockGuard`): a sample that runs
 backwards or jumps far ahead is refused and counted, never adopted.
@@ -32,8 +40,9 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from enum import Enum
 
-__all__ = ["CLOCK_FORMAT", "CLOCK_MAX_BYTES", "ClockGuard", "ClockSample", "ClockVerdict",
-           "decode_clock", "decode_time", "encode_clock", "encode_time"]
+__all__ = ["ACK_FORMAT", "CLOCK_FORMAT", "CLOCK_MAX_BYTES", "ClockGuard", "ClockSample",
+           "ClockVerdict", "decode_ack", "decode_clock", "decode_time", "encode_ack",
+           "encode_clock", "encode_time"]
 
 CLOCK_FORMAT = struct.Struct("<d")
 """8-byte little-endian float64 seconds."""
@@ -41,10 +50,16 @@ CLOCK_FORMAT = struct.Struct("<d")
 _TRUTH = struct.Struct("<I")
 """After the time, in a lockstep clock sample: ground-truth samples published."""
 _SENT = struct.Struct("<BI")
-"""Then per vehicle: system id, MAVLink payloads published."""
+"""Then per vehicle: system id, MAVLink payloads published (system id 0: the partner id)."""
 
-CLOCK_MAX_BYTES = CLOCK_FORMAT.size + _TRUTH.size + 255 * _SENT.size
-"""Longest clock sample, bytes: a lockstep sample of 255 vehicles (system ids 1..255)."""
+_PARTNER_SYSID = 0
+
+ACK_FORMAT = struct.Struct("<dI")
+"""A lockstep ack: the tick's time (float64 s) and the acking GCS's partner id (uint32)."""
+
+CLOCK_MAX_BYTES = CLOCK_FORMAT.size + _TRUTH.size + 256 * _SENT.size
+"""Longest clock sample, bytes: a lockstep sample of 255 vehicles (system ids 1..255) and
+its partner."""
 
 
 @dataclass(frozen=True)
@@ -56,15 +71,21 @@ class ClockSample:
     """Ground-truth samples published (None: a plain sample)."""
     sent: Mapping[int, int] = field(default_factory=dict)
     """MAVLink payloads published per vehicle system id."""
+    partner: int | None = None
+    """Partner id of the GCS whose acks the lockstep sim follows (None: none yet)."""
 
 
 def encode_clock(t: float, truth: int | None = None,
-                 sent: Mapping[int, int] | None = None) -> bytes:
-    """Clock payload for sim time ``t`` (s); with the counts (lockstep) if ``truth`` is given."""
+                 sent: Mapping[int, int] | None = None, partner: int | None = None) -> bytes:
+    """Clock payload for sim time ``t`` (s); with the counts (lockstep) if ``truth`` is given,
+    and its ``partner`` once it has one."""
     if truth is None:
         return encode_time(t)
+    entries = dict(sent or {})
+    if partner is not None:
+        entries[_PARTNER_SYSID] = partner
     return (encode_time(t) + _TRUTH.pack(truth % 2**32)
-            + b"".join(_SENT.pack(sysid, count % 2**32) for sysid, count in (sent or {}).items()))
+            + b"".join(_SENT.pack(sysid, count % 2**32) for sysid, count in entries.items()))
 
 
 def decode_clock(data: bytes) -> ClockSample:
@@ -84,7 +105,25 @@ def decode_clock(data: bytes) -> ClockSample:
     sent = dict(_SENT.iter_unpack(data[head:]))
     if len(sent) * _SENT.size != len(data) - head:
         raise ValueError("clock sample names a vehicle twice")
-    return ClockSample(t, truth, sent)
+    partner = sent.pop(_PARTNER_SYSID, None)
+    return ClockSample(t, truth, sent, partner)
+
+
+def encode_ack(t: float, partner: int) -> bytes:
+    """Lockstep ack of the tick at ``t`` (s) by the GCS whose partner id is ``partner``."""
+    return ACK_FORMAT.pack(float(t), partner)
+
+
+def decode_ack(data: bytes) -> tuple[float, int]:
+    """Time (s) and partner id of a lockstep ack (0: the time alone); ValueError naming
+    what is wrong."""
+    if len(data) == CLOCK_FORMAT.size:
+        return decode_time(data), 0
+    if len(data) != ACK_FORMAT.size:
+        raise ValueError(f"clock ack must be {CLOCK_FORMAT.size} or {ACK_FORMAT.size} bytes, "
+                         f"got {len(data)}")
+    (partner,) = struct.unpack_from("<I", data, CLOCK_FORMAT.size)
+    return decode_time(data[:CLOCK_FORMAT.size]), partner
 
 
 def encode_time(t: float) -> bytes:

@@ -1,0 +1,99 @@
+"""``gcs fly --connect`` to a simulator started elsewhere: in lockstep with one started with
+``--lockstep`` on another host (a network namespace), the same flight to the last digit as
+``gcs fly`` starting its own; what cannot be sound is refused at once with the reason."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import time
+
+import pytest
+
+from gcs.app import GcsApp, SimProcess, free_tcp_port
+from gcs.common import ConfigError
+from gcs.config import load_team
+from gcs.loop import ClockStoppedError
+from gcs.testing import Host
+from gcs.transport import ZenohSettings
+from tests.conftest import SHORT, run_gcs
+from tests.conftest import SQUARE as CONFIG
+
+TEAM = load_team(CONFIG)
+
+
+def _fly(*extra: str) -> tuple[subprocess.CompletedProcess[str], float]:
+    """``gcs fly --json`` of the short flight; the run and its wall time, s."""
+    start = time.monotonic()
+    run = run_gcs("fly", "--config", CONFIG, "--scenario", SHORT, "--json", "--quiet", *extra,
+                  timeout=600)
+    return run, time.monotonic() - start
+
+
+def _figures(run: subprocess.CompletedProcess[str]) -> dict[str, object]:
+    assert run.returncode == 0, run.stderr
+    data = json.loads(run.stdout)
+    assert data["completed"], data["error"]
+    data.pop("real_time_factor")
+    return dict(data)
+
+
+def test_joining_a_lockstep_simulator_on_another_host_flies_the_local_flight_to_the_last_digit(
+        other_host: Host) -> None:
+    endpoint = f"tcp/{other_host.address}:{free_tcp_port()}"
+    with SimProcess(CONFIG, endpoint=endpoint, speed="max", lockstep=True,
+                    wrap=other_host.command) as sim:
+        assert "lockstep 0.25 s" in sim.ready_line
+        joined, joined_wall = _fly("--connect", endpoint)
+        # flown: a second GCS is refused at once, naming why (the simulator is not fresh)
+        again, again_wall = _fly("--connect", endpoint)
+    local, local_wall = _fly()
+    print(f"joined across hosts {joined_wall:.1f} s wall, local {local_wall:.1f} s, "
+          f"refused again in {again_wall:.1f} s")
+    assert _figures(joined) == _figures(local)
+    assert again.returncode == 2 and again.stdout == ""
+    assert again.stderr.strip().count("\n") == 0, again.stderr
+    assert "gcs fly: error: --connect: " in again.stderr
+    assert "is in lockstep with another GCS already" in again.stderr
+    assert "start a fresh one for this flight" in again.stderr
+
+
+def test_a_free_running_simulator_faster_than_real_time_and_speed_with_connect_are_refused(
+) -> None:
+    endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
+    with SimProcess(CONFIG, endpoint=endpoint, speed="max"):
+        run, wall = _fly("--connect", endpoint)
+    assert run.returncode == 2 and run.stdout == "", run.stdout
+    assert run.stderr.startswith("gcs fly: error: --connect: the simulator at "), run.stderr
+    assert "runs free at" in run.stderr and "--lockstep" in run.stderr
+    assert wall < 30.0  # at once: not a flight of late ticks and stale telemetry
+    run, _ = _fly("--connect", endpoint, "--speed", "4")
+    assert run.returncode == 2
+    assert run.stderr.startswith("gcs fly: error: --speed: paces a simulator started here")
+
+
+def test_of_two_gcss_joining_one_lockstep_simulator_it_follows_the_first_and_stops_the_other(
+) -> None:
+    endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
+    settings = ZenohSettings(connect=(endpoint,))
+    with SimProcess(CONFIG, endpoint=endpoint, speed="max", lockstep=True), \
+            GcsApp(TEAM, zenoh_settings=settings, sim_clock=True, lockstep=None) as first, \
+            GcsApp(TEAM, zenoh_settings=settings, sim_clock=True, lockstep=None) as second:
+        assert first.lockstep and second.lockstep  # both joined the fresh simulator
+        first.start()
+        second.start()
+        outcomes = []
+        for app in (first, second):
+            try:
+                app.clock.sleep_until(5.0)
+                outcomes.append("flew")
+            except ClockStoppedError as exc:
+                outcomes.append(str(exc))
+                assert any("in lockstep with another GCS" in e.text for e in app.loop.events())
+        assert outcomes.count("flew") == 1, outcomes
+        stopped = next(o for o in outcomes if o != "flew")
+        assert stopped.startswith("the simulator is in lockstep with another GCS (partner ")
+        # a third is refused at once, before it opens a link
+        with pytest.raises(ConfigError, match=r"--connect: the simulator at .* is in lockstep "
+                                              r"with another GCS already \(at t = "):
+            GcsApp(TEAM, zenoh_settings=settings, sim_clock=True, lockstep=None)
