@@ -46,8 +46,16 @@ def _with(team: Team, part: str, **changes: object) -> Team:
     return dataclasses.replace(team, config=config)
 
 
-def _spin(team: Team) -> float:
-    """Worst distance error of a 10 s spin at full stick, the payload carried."""
+def _turn_rate(p_ned: np.ndarray, v_ned: np.ndarray) -> float:
+    """The team's rate of turn about its centroid, rad/s, clockwise seen from above."""
+    rel = p_ned[:, :2] - p_ned[:, :2].mean(axis=0)
+    vel = v_ned[:, :2] - v_ned[:, :2].mean(axis=0)
+    return float(np.sum(rel[:, 0] * vel[:, 1] - rel[:, 1] * vel[:, 0]) / np.sum(rel**2))
+
+
+def _spin(team: Team) -> tuple[float, float]:
+    """Worst distance error of a 10 s spin at full stick, the payload carried, and the
+    team's rate of turn at its end (rad/s, clockwise seen from above)."""
     with SimTeam(team, seed=2) as flight:
         flight.arm()
         flight.takeoff()
@@ -55,10 +63,12 @@ def _spin(team: Team) -> float:
         flight.wait(2)
         before = flight.metrics().worst_distance_error_by_phase_m.get("formation", 0.0)
         flight.sticks(rotate=1.0, seconds=10)
+        state = flight.state()
+        rate = _turn_rate(state.p_ned, state.v_ned)
         flight.wait(3)
         after = flight.metrics().worst_distance_error_by_phase_m["formation"]
         assert after > before  # the spin is the formation flight's worst
-        return after
+        return after, rate
 
 
 @pytest.fixture(scope="module")
@@ -82,28 +92,38 @@ def test_lifting_at_the_full_lift_rate_pulls_the_shape_beyond_it(square: Team) -
 
 
 def test_the_lead_cancels_a_lag_behind_a_turning_pull() -> None:
-    """An acceleration loop that follows the pull ``lag`` late leaves ``F(t) - F(t - lag)``
-    uncompensated; the lead is that, to first order in ``omega lag``."""
+    """An acceleration loop that follows the pull ``lag`` late gives the vehicle
+    ``(F(t) - F(t - lag)) / m`` more than commanded; the lead is minus that, to first
+    order in ``omega lag``."""
     pull = np.array([[-0.8, 0.1], [0.3, 0.6]])  # N, NED
-    omega, lag, mass = 0.4, 0.25, 0.4
+    omega, lag, mass = 0.4, 0.15, 0.4
     a = omega * lag
     late = rope_pull_ned(pull, -a)  # the same pulls, turned back by omega lag
-    short = (pull - late) / mass
+    extra = (pull - late) / mass
     lead = rope_turn_lead(pull, omega, lag, mass)
-    assert np.allclose(lead, short, atol=0.5 * a**2 * 0.81 / mass)
-    # clockwise seen from above (the guidance's positive rotate): a pull towards the
-    # south turns towards the west
-    assert rope_turn_lead(np.array([[-1.0, 0.0]]), 1.0, 1.0, 1.0)[0] == pytest.approx([0, -1])
+    assert np.allclose(lead, -extra, atol=0.5 * a**2 * 0.81 / mass)
+    # clockwise seen from above (the guidance's positive rotate): the vehicle north of
+    # the payload (pulled south) moves east, and the lead pushes it on east
+    assert rope_turn_lead(np.array([[-1.0, 0.0]]), 1.0, 1.0, 1.0)[0] == pytest.approx([0, 1])
     assert rope_pull_ned(np.array([[1.0, 0.0]]), math.pi / 2)[0] == pytest.approx([0, 1])
     square = load_team(SQUARE)
     assert Guidance.from_team(square).angular_rate(MotionDemand(rotate=1.0)) > 0
+    north_east = np.array([[1.0, 0.0], [0.0, 0.0]]), np.array([[0.0, 1.0], [0.0, 0.0]])
+    assert _turn_rate(*north_east) > 0  # the one at north moving east: clockwise
 
 
-def test_the_spin_keeps_the_shape_with_the_rope_lead(square: Team) -> None:
-    assert square.config.guidance.rope_lag == 0.25
-    led = _spin(square)
-    unled = _spin(_with(square, "guidance", rope_lag=0.0))
-    assert led < 0.8 * unled, (led, unled)  # paper flight, seeds 1-4: 0.13 against 0.17 m
+def test_the_spin_turns_as_commanded_and_keeps_the_shape_with_the_rope_lead(
+        square: Team) -> None:
+    """Without the lead the lag brakes the turn (0.11-0.13 rad/s of the 0.4 commanded)
+    and the centripetal feed-forward pulls the shape in; with it the team turns at the
+    commanded rate, clockwise, in shape."""
+    assert square.config.guidance.rope_lag == 0.15
+    commanded = Guidance.from_team(square).angular_rate(MotionDemand(rotate=1.0))
+    (led, led_rate), (unled, unled_rate) = (
+        _spin(square), _spin(_with(square, "guidance", rope_lag=0.0)))
+    assert unled_rate < 0.5 * commanded, unled_rate
+    assert led_rate == pytest.approx(commanded, rel=0.15), (led_rate, commanded)
+    assert led < 0.8 * unled, (led, unled)  # 12 s spin: 0.12 against 0.17 m
 
 
 def test_the_team_takes_off_below_its_shortest_rope(square: Team) -> None:

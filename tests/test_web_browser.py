@@ -558,10 +558,13 @@ def test_the_pilot_flies_the_team_with_buttons_keys_and_sticks(pilot, demo: Demo
     # set down while lifting: the altitude target drops back, the team is in hover again
     lifted = float(operator(pilot)["target"])
     press_phase(pilot, "set down", "setting down", demo, timeout=10)
-    assert float(operator(pilot)["target"]) < lifted - 1.0, text(pilot, "operator")
+    # the phase shows with its event at once, the operator line with the next tick
+    wait_for(lambda: float(operator(pilot)["target"]) < lifted - 1.0, 5,
+             "the altitude target back down", lambda: text(pilot, "operator"))
     wait_for(lambda: text(pilot, "phase") == "hover", 30, "hover after set down",
              lambda: situation(pilot, demo))
-    press_phase(pilot, "lift", "formation", demo)
+    # about 21 s of climb at speed 1: the pickup band at 0.02 m/s, then 0.1 m/s
+    press_phase(pilot, "lift", "formation", demo, timeout=90.0)
 
     # hotkey: hold W, the loop commands full forward and the real team speeds up northwards
     keyboard = pilot.keyboard

@@ -8,7 +8,9 @@ and the autopilot is left ``tau dF/dt / m`` short, against the turn. At the
 paper's 0.4 rad/s on the square that is about 0.13 m/s^2 per vehicle: the
 team turned at a third of the commanded rate while the guidance's centripetal
 feed-forward, sized for the commanded rate, pulled the shape in (0.17 m).
-Adding ``tau omega z x F / m`` to each setpoint cancels it.
+The autopilot's estimate of the pull is ``F(t - tau)``, so the vehicle gets
+``(F(t) - F(t - tau)) / m = tau dF/dt / m`` more than commanded; commanding
+``-tau omega z x F / m`` more cancels it.
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ def rope_turn_lead(pull_ned: np.ndarray, omega: float, lag: float,
                    mass: float) -> np.ndarray:
     """(n, 2) acceleration, m/s^2, that cancels an autopilot's lag ``lag`` (s) behind
     the horizontal rope pulls ``pull_ned`` (n, 2, N) turning at ``omega`` (rad/s,
-    clockwise seen from above) on vehicles of ``mass`` kg."""
-    k = lag * omega / mass
+    clockwise seen from above) on vehicles of ``mass`` kg: along each vehicle's
+    motion, as the lag brakes it."""
+    k = -lag * omega / mass
     return np.stack([-k * pull_ned[:, 1], k * pull_ned[:, 0]], axis=1)
