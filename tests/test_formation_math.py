@@ -139,6 +139,52 @@ def test_steady_state_acceleration_is_the_centripetal_one() -> None:
     np.testing.assert_allclose(u, -omega**2 * f.positions, atol=1e-12)
 
 
+@pytest.mark.parametrize("config", TEAMS)
+def test_a_spin_started_from_rest_does_not_pull_the_shape_in(config: str) -> None:
+    """Turn compensation: a team at rest in its shape, told to spin, accelerates along the
+    spin only (eq. udi alone adds the full centripetal pull, -omega^2 r, before it turns)."""
+    g = Guidance.from_team(load_team(config))
+    f = g.formation
+    g.lead = 0.0
+    demand = MotionDemand(rotate=1.0)
+    omega = g.angular_rate(demand)
+    desired = g.basis.desired_velocities(g.velocity_matrix(demand))
+    at_rest, yaw = np.zeros((f.n, 2)), np.zeros(f.n)
+    assert g.turn_compensation  # the shipped teams fly with it
+    u = g.accelerations(f.positions, at_rest, yaw, demand)
+    np.testing.assert_allclose(u, saturate(g.c1 * desired, norm_max=g.accel_norm,
+                                           axis_max=g.accel_axis), atol=1e-12)
+    g.turn_compensation = False
+    u = g.accelerations(f.positions, at_rest, yaw, demand)
+    centred = f.positions - f.positions.mean(axis=0)
+    paper = g.c1 * desired - omega**2 * centred
+    np.testing.assert_allclose(u, saturate(paper, norm_max=g.accel_norm,
+                                           axis_max=g.accel_axis), atol=1e-12)
+
+
+@pytest.mark.parametrize("config", TEAMS)
+def test_a_spin_stopped_keeps_the_centripetal_pull_of_the_turn_the_team_still_makes(
+        config: str) -> None:
+    """Turn compensation: a team in its shape still spinning at the rate it was told,
+    told to stop, is slowed along its motion and still pulled in as its turn needs
+    (eq. udi alone drops the pull at once, and the team widens)."""
+    g = Guidance.from_team(load_team(config))
+    f = g.formation
+    g.lead = 0.0
+    spinning = g.basis.desired_velocities(g.velocity_matrix(MotionDemand(rotate=1.0)))
+    omega = g.angular_rate(MotionDemand(rotate=1.0))
+    centred = f.positions - f.positions.mean(axis=0)
+    yaw = np.zeros(f.n)
+    u = g.accelerations(f.positions, spinning, yaw, MotionDemand())
+    expected = -g.c1 * spinning - omega**2 * centred
+    np.testing.assert_allclose(u, saturate(expected, norm_max=g.accel_norm,
+                                           axis_max=g.accel_axis), atol=1e-9)
+    g.turn_compensation = False
+    u = g.accelerations(f.positions, spinning, yaw, MotionDemand())
+    np.testing.assert_allclose(u, saturate(-g.c1 * spinning, norm_max=g.accel_norm,
+                                           axis_max=g.accel_axis), atol=1e-9)
+
+
 def test_saturation_in_norm_then_per_axis() -> None:
     u = np.array([[3.0, 0.0], [2.0, 2.0], [0.1, -0.2], [-1.0, 1.8]])
     s = saturate(u, norm_max=2.18, axis_max=1.54)
@@ -164,8 +210,9 @@ def test_diagonal_stick_is_not_faster() -> None:
 
 def reference_udi(v_own: np.ndarray, rel_p: np.ndarray, rel_v: np.ndarray, mask: np.ndarray,
                   d: np.ndarray, alpha_v: np.ndarray, alpha_a: np.ndarray, c1: float, c2: float,
-                  lead: float) -> np.ndarray:
-    """Eq. udi with the hold compensation as array expressions (the compiled kernel's spec)."""
+                  lead: float, omega: float = 0.0, turning: bool = False) -> np.ndarray:
+    """Eq. udi with the hold compensation and the turn compensation as array expressions
+    (the compiled kernel's spec)."""
     q, q_rate = -rel_p, -rel_v
     dist = np.linalg.norm(q, axis=2)
     unit = np.divide(q, dist[..., None], out=np.zeros_like(q), where=mask[..., None])
@@ -173,7 +220,15 @@ def reference_udi(v_own: np.ndarray, rel_p: np.ndarray, rel_v: np.ndarray, mask:
     ahead = q + lead * q_rate
     unit_ahead = np.divide(ahead, np.linalg.norm(ahead, axis=2)[..., None],
                            out=np.zeros_like(q), where=mask[..., None])
-    return (-c1 * v_own + np.einsum("is,isk->ik", alpha_v, unit)
+    desired = np.einsum("is,isk->ik", alpha_v, unit) / c1
+    rate = np.divide(q[..., 0] * q_rate[..., 1] - q[..., 1] * q_rate[..., 0], dist**2,
+                     out=np.zeros_like(dist), where=mask)
+    w = rate.sum(axis=1) / mask.sum(axis=1)  # each vehicle's edges' mean turn rate
+
+    def z_cross(a: np.ndarray) -> np.ndarray:  # z x a about down, in the plane
+        return np.column_stack((-a[:, 1], a[:, 0]))
+    turn = w[:, None] * z_cross(v_own) - omega * z_cross(desired) if turning else 0.0
+    return (-c1 * v_own + c1 * desired + turn
             + np.einsum("is,isk->ik", alpha_a - c2 * e, unit_ahead))
 
 
@@ -195,10 +250,14 @@ def test_compiled_guidance_matches_the_law_written_as_arrays(config: str) -> Non
         rel_p = np.einsum("ikl,isl->isk", rot, (p[nb] - p[:, None]) * mask[..., None])
         rel_v = np.einsum("ikl,isl->isk", rot, (v[nb] - v[:, None]) * mask[..., None])
         v_own = np.einsum("ikl,il->ik", rot, v)
-        local = reference_udi(v_own, rel_p, rel_v, mask, d, alpha_v, alpha_a, g.c1, g.c2, g.lead)
+        omega = g.angular_rate(demand)
+        assert g.turn_compensation
+        local = reference_udi(v_own, rel_p, rel_v, mask, d, alpha_v, alpha_a, g.c1, g.c2, g.lead,
+                              omega, turning=True)
         np.testing.assert_allclose(
             formation_acceleration(v_own, rel_p, rel_v, mask, d, alpha_v, alpha_a, c1=g.c1,
-                                   c2=g.c2, lead=g.lead), local, atol=1e-12)
+                                   c2=g.c2, lead=g.lead, omega=omega, turn_compensation=True),
+            local, atol=1e-12)
         ned = np.einsum("ilk,il->ik", rot, local)  # rotation back by +yaw
         expected = saturate(ned, norm_max=g.accel_norm, axis_max=g.accel_axis)
         np.testing.assert_allclose(g.accelerations(p, v, yaw, demand), expected, atol=1e-12)

@@ -94,8 +94,9 @@ def test_plain_eq_udi_at_4_hz_with_the_papers_gains_is_unstable_on_the_square() 
     on = Guidance.from_team(team)
     off = Guidance.from_team(dataclasses.replace(team, config=dataclasses.replace(
         team.config, guidance=dataclasses.replace(team.config.guidance,
-                                                  hold_compensation=False))))
-    assert off.lead == 0.0 and on.lead == pytest.approx(0.125)
+                                                  hold_compensation=False,
+                                                  turn_compensation=False))))
+    assert off.lead == 0.0 and on.lead == pytest.approx(0.125) and not off.turn_compensation
     v_star = on.basis.desired_velocities(on.velocity_matrix(MotionDemand(rotate=1.0)))
 
     rate_on, shape_on = spin(on, v_star, 160.0)

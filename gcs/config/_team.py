@@ -112,6 +112,15 @@ class GuidanceConfig:
         doc="the vehicles' autopilots' lag in following an external force, s: while the "
             "team spins, each setpoint leads the rope's turning pull by it "
             "(gcs/guidance/_rope_lead.py); 0 turns the lead off", default=0.0, ge=0.0, le=2.0)
+    setpoint_lag: float = field(
+        doc="the autopilots' lag in following an acceleration setpoint, s: the guidance "
+            "predicts the relative positions this much further ahead (about 0.25 for "
+            "ArduCopter; 0 for the simulated INDI vehicles, whose lag the hold's "
+            "prediction covers)", default=0.0, ge=0.0, le=1.0)
+    turn_compensation: bool = field(
+        doc="turn each vehicle's velocity error with a commanded spin, so that starting a "
+            "spin does not pull the shape in (see gcs.guidance); false is eq. udi",
+        default=True)
 
     @property
     def setpoints_per_tick(self) -> int:

@@ -17,8 +17,24 @@ turning about twice as fast, 2 m out of shape, held only by the saturation).
 So eq. udi is evaluated at the relative positions predicted half
 a period ahead: the edge directions along ``p_i - p_j + (T/2)(v_i - v_j)`` and
 the distance errors to first order, ``e_k + (T/2) d||z_k||/dt`` (which is zero
-in rigid motion). The hold's average delay is cancelled. With ``lead = 0`` the
-kernel is exactly eq. udi.
+in rigid motion). The hold's average delay is cancelled. An autopilot that
+follows a setpoint late (``guidance.setpoint_lag``) lengthens the prediction by its
+lag.
+
+Turn compensation. Eq. udi's acceleration feed-forward ``A_a z`` is the
+acceleration of the commanded rigid motion, ``omega z x v_desired`` for a spin.
+When the operator starts a spin the team is not turning yet: its velocity
+reaches the commanded one only at the rate c1 (a 6 s time constant with the
+paper's gains), but the full centripetal pull acts at once, and the shape
+shrinks (by 0.13 m on the square at 0.4 rad/s, the worst moment of the paper
+flight; 0.16 m on ArduCopter SITL). When the spin stops, the team still turns
+but the pull is gone, and the shape widens. With ``guidance.turn_compensation``
+the spin's part of the feed-forward is the centripetal acceleration of the
+motion the vehicle makes: ``w z x v_i - omega z x v_desired`` is added, ``w``
+the mean turn rate of its edges, ``(q x q')/||q||^2``, from the same relative
+measurements. In a rigid spin at the commanded rate it is zero; its turning
+part is perpendicular to the vehicle's velocity and never speeds it up. With
+``lead = 0`` and no turn compensation the kernel is exactly eq. udi.
 """
 
 from __future__ import annotations
@@ -53,6 +69,8 @@ def formation_acceleration(
     c1: float,
     c2: float,
     lead: float,
+    omega: float = 0.0,
+    turn_compensation: bool = False,
 ) -> np.ndarray:
     """Eq. udi for every vehicle, each in its own frame (compiled: :func:`gcs.guidance._udi.udi`).
 
@@ -76,12 +94,17 @@ def formation_acceleration(
             one of mid-hold.
         c1: velocity gain, 1/s. c2: distance gain, 1/s^2.
         lead: prediction horizon of the distance errors, s (half the guidance period).
+        omega: the team's commanded angular rate about down, rad/s (the turn
+            compensation's; eq. udi has it in ``alpha_a``).
+        turn_compensation: the feed-forward of the turn the vehicle's edges make rather
+            than of the commanded one (module doc); False is eq. udi.
 
     Returns:
         (n, 2) commanded acceleration, m/s^2, in each vehicle's frame.
     """
     return udi(_f64(v_own), _f64(rel_p), _f64(rel_v), np.ascontiguousarray(mask, dtype=bool),
-               _f64(d), _f64(alpha_v), _f64(alpha_a), float(c1), float(c2), float(lead))
+               _f64(d), _f64(alpha_v), _f64(alpha_a), float(c1), float(c2), float(lead),
+               float(omega), bool(turn_compensation))
 
 
 def saturate(u: np.ndarray, *, norm_max: float, axis_max: float) -> np.ndarray:
@@ -150,11 +173,15 @@ class Guidance:
         period: guidance period, s (sets the hold compensation).
         accel_norm, accel_axis: saturation of the commanded acceleration, m/s^2.
         hold_compensation: predict distance errors half a period ahead (see module doc).
+        setpoint_lag: the autopilots' lag in following a setpoint, s: added to the
+            prediction.
+        turn_compensation: turn the velocity error with a commanded spin (module doc).
     """
 
     def __init__(self, formation: Formation, *, c1: float, c2: float, max_speed: float,
                  max_rotation_disagreement: float, period: float, accel_norm: float,
-                 accel_axis: float, hold_compensation: bool = True) -> None:
+                 accel_axis: float, hold_compensation: bool = True,
+                 setpoint_lag: float = 0.0, turn_compensation: bool = True) -> None:
         self.formation = formation
         self.basis: MotionBasis = motion_basis(formation)
         self.c1, self.c2 = float(c1), float(c2)
@@ -162,7 +189,8 @@ class Guidance:
         self.max_rotation_disagreement = max_rotation_disagreement
         self.period = period
         self.accel_norm, self.accel_axis = accel_norm, accel_axis
-        self.lead = 0.5 * float(period) if hold_compensation else 0.0
+        self.lead = (0.5 * float(period) if hold_compensation else 0.0) + float(setpoint_lag)
+        self.turn_compensation = turn_compensation
         self._mask = np.ascontiguousarray(formation.slot_mask, dtype=bool)
         self._coefficients: tuple[MotionDemand, tuple[np.ndarray, np.ndarray, np.ndarray]] \
             | None = None
@@ -178,7 +206,8 @@ class Guidance:
         return cls(team.formation, c1=g.c1, c2=g.c2, max_speed=g.max_speed,
                    max_rotation_disagreement=g.max_rotation_disagreement,
                    period=1.0 / g.rate_hz, accel_norm=lim.accel_norm,
-                   accel_axis=lim.accel_axis, hold_compensation=g.hold_compensation)
+                   accel_axis=lim.accel_axis, hold_compensation=g.hold_compensation,
+                   setpoint_lag=g.setpoint_lag, turn_compensation=g.turn_compensation)
 
     def velocity_matrix(self, demand: MotionDemand) -> np.ndarray:
         """A_v (n, m) of a demand: the stick values multiply the unit motions."""
@@ -221,7 +250,8 @@ class Guidance:
         """
         alpha_v, alpha_a, d = self.coefficients(demand)
         return udi(meas.v_own, meas.rel_p, meas.rel_v, self._mask, d, alpha_v, alpha_a,
-                   self.c1, self.c2, self.lead)
+                   self.c1, self.c2, self.lead, self.angular_rate(demand),
+                   self.turn_compensation)
 
     def accelerations(self, p_ned: np.ndarray, v_ned: np.ndarray, yaw: np.ndarray,
                       demand: MotionDemand) -> np.ndarray:

@@ -54,8 +54,10 @@ def local_frames(p: np.ndarray, v: np.ndarray, yaw: np.ndarray, neighbour: np.nd
 @kernel()
 def udi(v_own: np.ndarray, rel_p: np.ndarray, rel_v: np.ndarray, mask: np.ndarray,
         d: np.ndarray, alpha_v: np.ndarray, alpha_a: np.ndarray, c1: float, c2: float,
-        lead: float) -> np.ndarray:
-    """Eq. udi per vehicle in its own frame, with the hold compensation ``lead`` (s).
+        lead: float, omega: float, turn_compensation: bool) -> np.ndarray:
+    """Eq. udi per vehicle in its own frame, with the hold compensation ``lead`` (s) and,
+    with ``turn_compensation``, the feed-forward of the turn its edges make in place of
+    the commanded rate ``omega`` (rad/s about down).
 
     Shapes and meaning as :func:`gcs.guidance._law.formation_acceleration`. A slot
     whose edge has no length (or an unknown one) contributes nothing.
@@ -64,21 +66,31 @@ def udi(v_own: np.ndarray, rel_p: np.ndarray, rel_v: np.ndarray, mask: np.ndarra
     u = np.empty((n, 2))
     for i in range(n):
         ux, uy = -c1 * v_own[i, 0], -c1 * v_own[i, 1]
+        fx, fy = 0.0, 0.0  # c1 times the vehicle's desired velocity, A_v zhat
+        turn, edges = 0.0, 0  # the turn rate of its edges, rad/s
         for k in range(slots):
             qx, qy = -rel_p[i, k, 0], -rel_p[i, k, 1]  # p_i - p_j
             dist = math.sqrt(qx * qx + qy * qy)
             if not (mask[i, k] and dist > _EPS):
                 continue
             rx, ry = -rel_v[i, k, 0], -rel_v[i, k, 1]  # its rate
+            turn += (qx * ry - qy * rx) / (dist * dist)
+            edges += 1
             e = dist - d[i, k] + lead * (qx * rx + qy * ry) / dist  # error, predicted
-            ux += alpha_v[i, k] * qx / dist
-            uy += alpha_v[i, k] * qy / dist
+            fx += alpha_v[i, k] * qx / dist
+            fy += alpha_v[i, k] * qy / dist
             ax, ay = qx + lead * rx, qy + lead * ry  # the edge half a period ahead
             ahead = math.sqrt(ax * ax + ay * ay)
             if ahead > _EPS:
                 gain = (alpha_a[i, k] - c2 * e) / ahead
                 ux += gain * ax
                 uy += gain * ay
+        ux, uy = ux + fx, uy + fy
+        if turn_compensation and c1 > 0.0 and edges > 0:
+            # w z x v_own - omega z x v_desired, w its edges' mean turn rate
+            w = turn / edges
+            ux += -w * v_own[i, 1] + omega * fy / c1
+            uy += w * v_own[i, 0] - omega * fx / c1
         u[i, 0], u[i, 1] = ux, uy
     return u
 
