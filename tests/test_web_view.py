@@ -26,6 +26,7 @@ from gcs.app import GcsApp, free_tcp_port
 from tests.test_safety_flight import break_vehicle, in_formation, sim_sleep
 from tests.test_web_browser import SCENE_GREEN_MIN, headless_chromium, scene_pixels, wait_for
 from web import WebUi
+from web.wireviewer import WireViewer
 
 AWAY = 3.0
 """How far from the origin the team is when a viewer joins, m."""
@@ -131,6 +132,40 @@ def test_a_viewer_joining_far_from_the_origin_sees_the_team(flight: GcsApp, page
         assert green > SCENE_GREEN_MIN, f"{green} vehicle pixels on screen; see {shot}"
     finally:
         page.context.close()
+
+
+def test_a_page_putting_its_first_view_back_is_framed_again(flight: GcsApp,
+                                                            page_ui: WebUi) -> None:
+    """A page shows the framing, then puts its own first view back (viser's initial
+    camera, looking at the origin), as a loading or reconnecting page does once the
+    scene's up direction and initial camera arrive: that is no pan of the viewer's, the
+    camera looks at the team again (it stayed on the origin, the follow kept that "pan").
+    The page here is a websocket client sending a browser's camera reports."""
+    before = set(page_ui.server.get_clients())
+    viewer = WireViewer(page_ui.server.get_port())
+    try:
+        viewer.report_camera((3.0, 3.0, -3.0), (0.0, 0.0, 0.0))  # three.js's default view
+        wait_for(lambda: bool(set(page_ui.server.get_clients()) - before), 10,
+                 "the viewer connected")
+        client = page_ui.server.get_clients()[max(set(page_ui.server.get_clients()) - before)]
+        wait_for(lambda: looks_at_team(client, flight), 5, "the framing sent",
+                 lambda: camera_text(client, flight))
+        camera = client.camera
+        viewer.report_camera(tuple(camera.position), tuple(camera.look_at))  # shown
+        time.sleep(0.5)  # taken in (viser's thread pool)
+        reported: list[np.ndarray] = []
+
+        async def report(camera: viser.CameraHandle) -> None:  # inline: before any move
+            reported.append(np.array(camera.look_at))
+
+        client.camera.on_update(report)
+        viewer.report_camera((-3.4, -1.0, -2.4), (0.0, 0.0, 0.0))  # the page's first view
+        wait_for(lambda: any(np.abs(r).max() < 1e-3 for r in reported), 5,
+                 "the page's first view reported")
+        wait_for(lambda: looks_at_team(client, flight), 5, "the camera on the team again",
+                 lambda: camera_text(client, flight))
+    finally:
+        viewer.close()
 
 
 def pan_away(page) -> None:  # type: ignore[no-untyped-def]

@@ -16,6 +16,12 @@ team is away from the origin, one who orbited, one whose camera fell behind.
   reported point that is none of those this view set lately is the viewer's
   pan; while the viewer's hand is on the camera (a report this view did not
   set, in the last :data:`HANDS_OFF_S`) the camera is not moved from under it.
+  One is not: the page's own first view (viser's initial camera, looking at
+  the origin). The browser puts it back by itself while the page
+  loads (when the initial camera and the scene's up direction arrive), even
+  after it showed a framing; taken as a pan, it left a new viewer looking at
+  the origin, wherever the team. The team is framed again instead (also after
+  viser's "Reset View", which goes to that view).
 * **Centre on team** (the View folder's button, key C): looks at the team again
   from the viewer's side at the framing distance and height; the pan is gone.
   The same happens when the team has landed.
@@ -63,6 +69,10 @@ _MATCH = 1e-3
 
 FRAME_AGAIN_S = 0.5
 """A framing the browser has not shown after this long is sent again, s."""
+
+_PAGE_LOOK_AT = np.zeros(3)
+"""Where the page's own first view looks, NED, m: the pages' ``initial_camera.look_at``
+(web._ui, web._replay_page) and three.js's default before it arrives."""
 
 HANDS_OFF_S = 0.5
 """The camera follows only once the viewer has left it alone this long, s."""
@@ -123,7 +133,8 @@ class ViewControls:
         or the viewer's own hand on the camera."""
         look_at = np.array(camera.look_at, dtype=float)
         if not self._was_set(look_at):
-            self._viewer_at = time.monotonic()
+            if not self._page_view(look_at):  # the page's own view is no hand of the viewer
+                self._viewer_at = time.monotonic()
             return
         with self._lock:
             placed = list(self._set_at)
@@ -149,7 +160,9 @@ class ViewControls:
             asked, self._centre_asked = self._centre_asked, False
         camera = self.client.camera
         look_at = np.array(camera.look_at, dtype=float)
-        stale = not self._shown and not self._was_set(look_at)
+        # the browser does not show the framing: not yet, or it put its own first view
+        # back over it (never a pan: framed again whatever it showed before)
+        stale = self._page_view(look_at) or (not self._shown and not self._was_set(look_at))
         if not self._framed or asked or (reframe and self.follow.value) or (
                 stale and time.monotonic() - self._framed_at >= FRAME_AGAIN_S):
             # a new viewer: the page's first view; else from the viewer's own side. Framed
@@ -177,6 +190,11 @@ class ViewControls:
         if time.monotonic() - self._viewer_at < HANDS_OFF_S:
             return  # a move now would pull the camera from under the viewer's drag
         self._move(target + (camera.position - look_at), target)
+
+    def _page_view(self, look_at: np.ndarray) -> bool:
+        """The reported point is the page's own first view's, not one this view set."""
+        return (float(np.max(np.abs(look_at - _PAGE_LOOK_AT))) < _MATCH
+                and not self._was_set(look_at))
 
     def _was_set(self, look_at: np.ndarray) -> bool:
         with self._lock:  # the reports come on viser's threads
