@@ -19,6 +19,8 @@ import yaml
 
 from gcs.analysis import analyze, even_rope_lengths, static_load
 from gcs.analysis._static_load import NoHangingPointError
+from gcs.analysis._team_load import worst_load
+from gcs.analysis._worst_case import flown_scale_max
 from gcs.common import ConfigError
 from gcs.config import Team, load_team
 from sim import (
@@ -315,3 +317,21 @@ def test_the_hold_stiffness_predicts_a_square_with_one_vehicle_off_its_place(
                     0.4, -place[:, 2])
     assert down / (0.4 * G) == pytest.approx(predicted.share, abs=0.02)
     assert predicted.share.max() > 0.3
+
+
+def test_the_worst_load_covers_the_largest_scale_the_team_flies() -> None:
+    """The ropes lean most at the largest scale flown (the shape's scale capped just inside
+    the safe span): the worst tension and pull are taken there too. At the desired shape
+    alone the triangle's worst tension was 1.113 N, and its paper flight, which grows the
+    shape to 1.1, measured 1.132 N (`gcs analyze --verify`)."""
+    team = load_team("configs/bebop_triangle.yaml")
+    a = analyze(team)
+    cap = flown_scale_max(team, a.safe_span)
+    assert cap > 1.1  # the paper flight's 1.1 is flown
+    cfg = team.config.analysis
+    nominal, grown = (worst_load(team, cfg.position_error, stiffness=cfg.hold_stiffness, scale=s)
+                      for s in (1.0, cap))
+    assert grown.tension > nominal.tension and grown.horizontal > nominal.horizontal
+    assert a.load is not None
+    assert a.load.worst_tension == pytest.approx(grown.tension)
+    assert a.load.worst_tension > 1.132  # what the flight measured

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from gcs.analysis._worst_case import Analysis
+from gcs.analysis._worst_case import Analysis, flown_scale_max
 from gcs.config import GuidanceConfig, Team
 
 __all__ = ["safe_guidance"]
@@ -18,8 +18,6 @@ __all__ = ["safe_guidance"]
 def safe_guidance(team: Team, analysis: Analysis) -> GuidanceConfig:
     """``team``'s guidance config with ``scale_max`` capped at the safe deformation."""
     guidance = team.config.guidance
-    radius = float(team.formation.radii.max())
-    safe = 0.5 * analysis.safe_span / radius if radius > 0 else float("inf")
-    if safe >= guidance.scale_max:
-        return guidance
-    return dataclasses.replace(guidance, scale_max=max(1.0, 0.98 * safe))
+    cap = flown_scale_max(team, analysis.safe_span)
+    return guidance if cap >= guidance.scale_max else dataclasses.replace(guidance,
+                                                                          scale_max=cap)

@@ -84,9 +84,11 @@ class WorstLoad:
     tried: int
 
 
-def worst_load(team: Team, error: float, *, stiffness: float, seed: int = 0) -> WorstLoad:
+def worst_load(team: Team, error: float, *, stiffness: float, seed: int = 0,
+               scale: float = 1.0) -> WorstLoad:
     """The worst share with each vehicle anywhere within ``error`` m (3-D) of its place at
-    the desired shape, the payload at rest on ropes of effective ``stiffness`` N/m.
+    the desired shape (times ``scale``), the payload at rest on ropes of effective
+    ``stiffness`` N/m.
 
     Deterministic for a given ``seed``. Displacements at the bound are sampled (moving a
     vehicle away from the payload tightens its rope, towards it slackens it): each vehicle
@@ -94,7 +96,7 @@ def worst_load(team: Team, error: float, *, stiffness: float, seed: int = 0) -> 
     most loaded vehicle's share is climbed: every vehicle moves to the bound along the
     gradient of that share (finite differences), while that gains.
     """
-    base = _anchors(np.asarray(team.formation.positions, dtype=np.float64))
+    base = _anchors(scale * np.asarray(team.formation.positions, dtype=np.float64))
     n = len(base)
     ropes, weight = _ropes(team), _weight(team)
     best_share, best_vehicle, best = -1.0, 0, base

@@ -54,7 +54,13 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from gcs.analysis._team_load import desired_load, even_rope_lengths, hang_depth, worst_load
+from gcs.analysis._team_load import (
+    WorstLoad,
+    desired_load,
+    even_rope_lengths,
+    hang_depth,
+    worst_load,
+)
 from gcs.config import Team
 from gcs.formation import motion_basis
 
@@ -369,6 +375,28 @@ def _chain(team: Team, mass: float, share: float) -> _Chain:
                   safe_margin=safe_span - 2.0 * float(team.formation.radii.max()))
 
 
+def flown_scale_max(team: Team, safe_span: float) -> float:
+    """The largest scale the GCS flies: ``guidance.scale_max`` capped just inside the safe
+    span (2 % short of it; never below 1)."""
+    guidance = team.config.guidance
+    radius = float(team.formation.radii.max())
+    safe = 0.5 * safe_span / radius if radius > 0 else math.inf
+    return guidance.scale_max if safe >= guidance.scale_max else max(1.0, 0.98 * safe)
+
+
+def _worst_flown_load(team: Team, safe_span: float) -> WorstLoad:
+    """The worst load within ``analysis.position_error`` over the shapes the team flies
+    carrying the payload: the desired shape and the largest scale (its ropes lean most);
+    the largest share, tension and pull of the two."""
+    cfg = team.config.analysis
+    worst = [worst_load(team, cfg.position_error, stiffness=cfg.hold_stiffness, scale=s)
+             for s in sorted({1.0, flown_scale_max(team, safe_span)})]
+    top = max(worst, key=lambda w: w.share)
+    return dataclasses.replace(top, tension=max(w.tension for w in worst),
+                               horizontal=max(w.horizontal for w in worst),
+                               tried=sum(w.tried for w in worst))
+
+
 def _carries(team: Team, mass: float, share: float, gain_lhs: float, worst_share: float) -> bool:
     """Whether every payload-bound condition holds for ``mass`` kg at ``share`` (and at
     ``worst_share``, the full-speed thrust)."""
@@ -509,8 +537,7 @@ def analyze(team: Team) -> Analysis:
 
     chain = _chain(team, M, design)
     if ld is not None:
-        worst = worst_load(team, cfg.analysis.position_error,
-                           stiffness=cfg.analysis.hold_stiffness)
+        worst = _worst_flown_load(team, chain.safe_span)
         ld = dataclasses.replace(
             ld, worst_share=worst.share, worst_vehicle=f.ids[worst.vehicle],
             position_error=worst.error, worst_tension=worst.tension,
