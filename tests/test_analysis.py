@@ -75,7 +75,7 @@ def test_equilibrium_tension_is_eq_T(square) -> None:  # type: ignore[no-untyped
     # an equilateral triangle of side 1.2 m: its circumradius
     ("configs/bebop_triangle.yaml", 3, 0.25, 1.2, 1.2 / math.sqrt(3)),
     # a regular hexagon of radius 1 m (its positions are given to 6 decimals)
-    ("configs/bebop_hexagon.yaml", 6, 0.8, 1.6, 1.0),
+    ("configs/bebop_hexagon.yaml", 6, 0.3, 1.6, 1.0),
 ])
 def test_equilibrium_tension_is_eq_T_for_n_vehicles(config: str, n: int, mass: float,
                                                     rope: float, r: float) -> None:
