@@ -193,8 +193,9 @@ def test_centre_on_team_by_key_and_by_button(flight: GcsApp, page_ui: WebUi,
             pan_away(page)
             wait_for(lambda: off_team(client, flight) > 1.5, 5, "the view panned off the team",
                      lambda: camera_text(client, flight))
-            time.sleep(0.5)  # the page keeps the viewer's pan
-            assert off_team(client, flight) > 1.5, camera_text(client, flight)
+            time.sleep(0.5)  # the page keeps the viewer's pan (re-centred is within ON_TEAM;
+            # the follow carries the pan with the moving team, a few cm either way)
+            assert off_team(client, flight) > 1.0, camera_text(client, flight)
             press()
             wait_for(lambda: looks_at_team(client, flight), 5, "the camera back on the team",
                      lambda: camera_text(client, flight))
