@@ -343,6 +343,8 @@ def test_the_camera_frames_the_team_then_follows_it_as_the_viewer_chose(
         panel = ControlPanel(client, cast(OperatorActions, object()), ControlLock(),
                              on_control_change=lambda: None)
         view, camera = panel.view, client.camera
+        now = [0.0]  # the view's windows on a clock of the test's: a loaded machine's
+        view.clock = lambda: now[0]  # slow round trips are not the viewer's hand
         centroid = np.array([2.1, 2.2, -1.5])  # 3 m from the origin
         view.update(None, 0.0)  # the team not known yet: the camera stays
         np.testing.assert_allclose(camera.look_at, (0.0, 0.0, 0.0))
@@ -356,7 +358,7 @@ def test_the_camera_frames_the_team_then_follows_it_as_the_viewer_chose(
         viewer.report_camera((-3.0, -1.0, -2.0), (0.0, 0.0, 0.0))
         wait_for_camera(camera, (0.0, 0.0, 0.0))
         view.update(centroid, 0.7)
-        time.sleep(FRAME_AGAIN_S)
+        now[0] += FRAME_AGAIN_S
         view.update(centroid, 0.7)
         np.testing.assert_allclose(camera.look_at, centroid, atol=1e-9)
         np.testing.assert_allclose(camera.position, position, atol=1e-9)
@@ -381,7 +383,7 @@ def test_the_camera_frames_the_team_then_follows_it_as_the_viewer_chose(
         np.testing.assert_allclose(camera.look_at, (0.5, 0.0, -1.0), atol=1e-9)
         view.update(centroid + 3 * delta, 0.7)  # the team moved, the viewer still drags
         np.testing.assert_allclose(camera.look_at, (0.5, 0.0, -1.0), atol=1e-9)
-        time.sleep(HANDS_OFF_S)
+        now[0] += HANDS_OFF_S
         view.update(centroid + 3 * delta, 0.7)
         np.testing.assert_allclose(camera.look_at - camera.position, (-0.5, -4.0, 5.0),
                                    atol=1e-9)

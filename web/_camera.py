@@ -36,6 +36,7 @@ import collections
 import math
 import threading
 import time
+from collections.abc import Callable
 from typing import Literal
 
 import numpy as np
@@ -102,10 +103,14 @@ class ViewControls:
     Args:
         client: the viewer.
         order: where the folder goes in the viewer's panel.
+        clock: the clock of :data:`HANDS_OFF_S` and :data:`FRAME_AGAIN_S`.
     """
 
-    def __init__(self, client: viser.ClientHandle, *, order: float | None = None) -> None:
+    def __init__(self, client: viser.ClientHandle, *, order: float | None = None,
+                 clock: Callable[[], float] = time.monotonic) -> None:
         self.client = client
+        self.clock = clock
+        """The clock of the hands-off and framing windows, s (a test steps its own)."""
         gui = client.gui
         with gui.add_folder("View", order=order):
             self.follow = gui.add_checkbox("camera follows team", True,
@@ -133,13 +138,13 @@ class ViewControls:
         or the viewer's own hand on the camera."""
         look_at = np.array(camera.look_at, dtype=float)
         if not self._was_set(look_at):
-            if not self._page_view(look_at):  # the page's own view is no hand of the viewer
-                self._viewer_at = time.monotonic()
+            if not _page_view(look_at):  # the page's own view is no hand of the viewer
+                self._viewer_at = self.clock()
             return
         with self._lock:
             placed = list(self._set_at)
         if not any(float(np.max(np.abs(camera.position - p))) < _MATCH for p in placed):
-            self._viewer_at = time.monotonic()  # orbiting or zooming about our point
+            self._viewer_at = self.clock()  # orbiting or zooming about our point
         self._shown = True
 
     def request_centre(self) -> None:
@@ -162,9 +167,10 @@ class ViewControls:
         look_at = np.array(camera.look_at, dtype=float)
         # the browser does not show the framing: not yet, or it put its own first view
         # back over it (never a pan: framed again whatever it showed before)
-        stale = self._page_view(look_at) or (not self._shown and not self._was_set(look_at))
+        was_set = self._was_set(look_at)
+        stale = not was_set and (_page_view(look_at) or not self._shown)
         if not self._framed or asked or (reframe and self.follow.value) or (
-                stale and time.monotonic() - self._framed_at >= FRAME_AGAIN_S):
+                stale and self.clock() - self._framed_at >= FRAME_AGAIN_S):
             # a new viewer: the page's first view; else from the viewer's own side. Framed
             # again until the browser shows it: one that was still loading put its first
             # camera back over the framing, and reported that.
@@ -172,7 +178,7 @@ class ViewControls:
                 self._side = camera.position - camera.look_at
             direction = self._side
             self._framed, self._shown = True, False
-            self._framed_at = time.monotonic()
+            self._framed_at = self.clock()
             self._pan = np.zeros(3)
             self._move(*team_view(centroid, team_reach, direction))
             return
@@ -181,20 +187,15 @@ class ViewControls:
         if not self.follow.value:
             self._pan = None
             return
-        if self._pan is None or not self._was_set(look_at):
+        if self._pan is None or not was_set:
             self._pan = look_at - centroid  # follow from here: the viewer's own view
             self._known(look_at)  # known from now on, as the ones this view set
         target = centroid + self._pan
         if float(np.linalg.norm(target - look_at)) < FOLLOW_STEP:
             return
-        if time.monotonic() - self._viewer_at < HANDS_OFF_S:
+        if self.clock() - self._viewer_at < HANDS_OFF_S:
             return  # a move now would pull the camera from under the viewer's drag
         self._move(target + (camera.position - look_at), target)
-
-    def _page_view(self, look_at: np.ndarray) -> bool:
-        """The reported point is the page's own first view's, not one this view set."""
-        return (float(np.max(np.abs(look_at - _PAGE_LOOK_AT))) < _MATCH
-                and not self._was_set(look_at))
 
     def _was_set(self, look_at: np.ndarray) -> bool:
         with self._lock:  # the reports come on viser's threads
@@ -218,3 +219,8 @@ class ViewControls:
         with self.client.atomic():
             camera.position = position
             camera.look_at = look_at
+
+
+def _page_view(look_at: np.ndarray) -> bool:
+    """The point looked at is the page's own first view's (unless this view set it)."""
+    return float(np.max(np.abs(look_at - _PAGE_LOOK_AT))) < _MATCH

@@ -118,8 +118,9 @@ class GuidanceConfig:
             "ArduCopter; 0 for the simulated INDI vehicles, whose lag the hold's "
             "prediction covers)", default=0.0, ge=0.0, le=1.0)
     turn_compensation: bool = field(
-        doc="turn each vehicle's velocity error with a commanded spin, so that starting a "
-            "spin does not pull the shape in (see gcs.guidance); false is eq. udi",
+        doc="the spin's feed-forward is the centripetal acceleration of the turn each "
+            "vehicle's edges make, not of the commanded one, so that starting or stopping a "
+            "spin does not pull the shape in or out (see gcs.guidance); false is eq. udi",
         default=True)
 
     @property

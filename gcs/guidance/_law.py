@@ -175,7 +175,7 @@ class Guidance:
         hold_compensation: predict distance errors half a period ahead (see module doc).
         setpoint_lag: the autopilots' lag in following a setpoint, s: added to the
             prediction.
-        turn_compensation: turn the velocity error with a commanded spin (module doc).
+        turn_compensation: the spin's feed-forward of the turn the edges make (module doc).
     """
 
     def __init__(self, formation: Formation, *, c1: float, c2: float, max_speed: float,
