@@ -2,9 +2,10 @@
 
 The autopilot is a thread speaking MAVLink 2 through ``pymavlink.mavutil``,
 as a real PX4 or ArduPilot on a UDP port would. It answers commands, streams
-HEARTBEAT and LOCAL_POSITION_NED, enforces the rules each autopilot imposes
-(refusing what the real one would refuse) and records every violation of the
-expected sequence, which the tests then require to be empty.
+HEARTBEAT, LOCAL_POSITION_NED and ATTITUDE_TARGET (a level hover's thrust),
+enforces the rules each autopilot imposes (refusing what the real one would
+refuse) and records every violation of the expected sequence, which the tests
+then require to be empty.
 
 Like a real GPS autopilot it may keep its own local origin (``origin``): its
 LOCAL_POSITION_NED is then relative to it, GLOBAL_POSITION_INT (``gps``) gives
@@ -47,6 +48,8 @@ from gcs.wire._modes import px4_custom_mode
 from gcs.wire._setpoints import MASK_ACCEL, MASK_ACCEL_XY_POS_Z
 
 GCS_SYSID = 245
+HOVER_THRUST = 0.4
+"""Collective thrust the autopilot reports (ATTITUDE_TARGET), a fraction of its full thrust."""
 VEHICLE = 1
 ARM = v20.MAV_CMD_COMPONENT_ARM_DISARM
 SET_MODE = v20.MAV_CMD_DO_SET_MODE
@@ -208,6 +211,9 @@ class ScriptedAutopilot(threading.Thread):
         north, east = self.xy
         self.conn.mav.local_position_ned_send(t_ms, north, east, self.z_ned, 0.0, 0.0,
                                               self.vz_ned)
+        # the collective thrust of a level hover, as PX4 and ArduCopter send it
+        self.conn.mav.attitude_target_send(t_ms, 0, (1.0, 0.0, 0.0, 0.0), 0.0, 0.0, 0.0,
+                                           HOVER_THRUST)
         if self.gps and self.origin is not None:
             here = moved(self.origin, north, east, self.z_ned)
             self.conn.mav.global_position_int_send(

@@ -23,6 +23,7 @@ from gcs.wire import (
     FrameDecoder,
     LocalPosition,
     TelemetryStore,
+    ThrustTarget,
     mavlink,
 )
 from gcs.wire._telemetry import Imu
@@ -31,7 +32,7 @@ from tests.fuzzing import assert_quiet, batches, datagrams, fuzz_settings, timed
 TELEMETRY = [mavlink.MAVLINK_MSG_ID_HEARTBEAT, mavlink.MAVLINK_MSG_ID_LOCAL_POSITION_NED,
              mavlink.MAVLINK_MSG_ID_ATTITUDE, mavlink.MAVLINK_MSG_ID_ATTITUDE_QUATERNION,
              mavlink.MAVLINK_MSG_ID_HIGHRES_IMU, mavlink.MAVLINK_MSG_ID_SYS_STATUS,
-             mavlink.MAVLINK_MSG_ID_STATUSTEXT]
+             mavlink.MAVLINK_MSG_ID_STATUSTEXT, mavlink.MAVLINK_MSG_ID_ATTITUDE_TARGET]
 """The types the store keeps."""
 MEASURED = (LocalPosition, Attitude, Imu)
 """Records of measured values, each bounded by TELEMETRY_MAX_ABS."""
@@ -73,6 +74,8 @@ def test_telemetry_of_any_value_is_stored_finite_or_refused_and_counted(
                               for v in floats(getattr(record, name, ()))]
                     assert all(math.isfinite(v) for v in values), record
                     assert all(abs(v) <= TELEMETRY_MAX_ABS for v in values), record
+                if isinstance(record, ThrustTarget):  # a fraction of the autopilot's thrust
+                    assert 0.0 <= record.thrust <= 1.0, record
                 assert store.snapshot() is not None
 
     fuzz()

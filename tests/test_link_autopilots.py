@@ -193,8 +193,8 @@ def test_ardupilot_position_setpoints_stop_when_the_copter_leaves_guided(udp_lin
 
 @pytest.mark.parametrize(("kind", "script", "note"), [
     ("ardupilot", {}, ("info", "vehicle 1: telemetry rates set for LOCAL_POSITION_NED, "
-                               "ATTITUDE, SYS_STATUS, GLOBAL_POSITION_INT, GPS_GLOBAL_ORIGIN, "
-                               "HOME_POSITION")),
+                               "ATTITUDE, SYS_STATUS, ATTITUDE_TARGET, GLOBAL_POSITION_INT, "
+                               "GPS_GLOBAL_ORIGIN, HOME_POSITION")),
     ("px4", {v20.MAV_CMD_SET_MESSAGE_INTERVAL: [
         v20.MAV_RESULT_ACCEPTED, v20.MAV_RESULT_UNSUPPORTED, DROP]},
      ("warning", "vehicle 1: telemetry rate not set for ATTITUDE (UNSUPPORTED), SYS_STATUS "
@@ -238,6 +238,7 @@ def test_manager_asks_a_real_autopilot_for_the_telemetry_the_gcs_reads(
     assert asked == [(v20.MAVLINK_MSG_ID_LOCAL_POSITION_NED, 50_000.0),
                      (v20.MAVLINK_MSG_ID_ATTITUDE, 50_000.0),
                      (v20.MAVLINK_MSG_ID_SYS_STATUS, 1_000_000.0),
+                     (v20.MAVLINK_MSG_ID_ATTITUDE_TARGET, 250_000.0),
                      (v20.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, 200_000.0),
                      (v20.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN, 2_000_000.0),
                      (v20.MAVLINK_MSG_ID_HOME_POSITION, 2_000_000.0)]
@@ -268,7 +269,8 @@ def test_a_rebooted_autopilot_is_asked_for_its_rates_again() -> None:
                 time.sleep(0.05)
             time.sleep(0.2)  # the manager's check loop sees it gone
     assert notes == ["vehicle 1: telemetry rates set for LOCAL_POSITION_NED, ATTITUDE, "
-                     "SYS_STATUS, GLOBAL_POSITION_INT, GPS_GLOBAL_ORIGIN, HOME_POSITION"] * 2
+                     "SYS_STATUS, ATTITUDE_TARGET, GLOBAL_POSITION_INT, GPS_GLOBAL_ORIGIN, "
+                     "HOME_POSITION"] * 2
 
 
 def test_ardupilot_peer_refuses_arming_outside_guided(udp_link: Link) -> None:
@@ -429,6 +431,7 @@ def test_message_interval_requests(udp_link: Link) -> None:
     assert results == {"LOCAL_POSITION_NED": CommandResult.ACCEPTED,
                        "ATTITUDE": CommandResult.ACCEPTED,
                        "SYS_STATUS": CommandResult.UNSUPPORTED,
+                       "ATTITUDE_TARGET": CommandResult.ACCEPTED,
                        "HIGHRES_IMU": CommandResult.ACCEPTED}
     asked = [(int(r.msg.param1), r.msg.param2) for r in
              peer.commands(v20.MAV_CMD_SET_MESSAGE_INTERVAL)]

@@ -23,7 +23,7 @@ import numpy as np
 from gcs.wire import Geodetic, MavMessage, SimMode, mavlink, ned_to_geodetic, px4_base_mode
 from vehicles._autopilot import Autopilot
 from vehicles._battery import BatteryReading
-from vehicles._quaternion import quat_to_euler
+from vehicles._quaternion import euler_to_quat, quat_to_euler
 from vehicles._state import Measurements
 from vehicles._streams import TelemetryMessage
 
@@ -178,6 +178,15 @@ def _attitude_quaternion(mav: mavlink.MAVLink, v: VehicleView) -> MavMessage:
     return mav.attitude_quaternion_encode(time_boot_ms(v.t), *(float(x) for x in q), *_rates(v))
 
 
+def _attitude_target(mav: mavlink.MAVLink, v: VehicleView) -> MavMessage:
+    """The attitude and collective thrust the controller commands, thrust as a fraction of
+    the rotors' full thrust (PX4's and ArduCopter's 0 .. 1)."""
+    s, i = v.autopilot.state, v.index
+    q = euler_to_quat(*(float(x) for x in s.attitude_cmd[i]))
+    thrust = min(1.0, max(0.0, float(s.thrust_cmd[i]) / v.autopilot.airframe.thrust_max))
+    return mav.attitude_target_encode(time_boot_ms(v.t), 0, q, 0.0, 0.0, 0.0, thrust)
+
+
 def _imu(mav: mavlink.MAVLink, v: VehicleView) -> MavMessage:
     m, i = v.measurements, v.index
     return mav.highres_imu_encode(int(v.t * 1e6), *(float(x) for x in m.accel_body[i]),
@@ -277,6 +286,7 @@ _BUILDERS: dict[TelemetryMessage, Callable[[mavlink.MAVLink, VehicleView], MavMe
     TelemetryMessage.LOCAL_POSITION_NED: _position,
     TelemetryMessage.ATTITUDE: _attitude,
     TelemetryMessage.ATTITUDE_QUATERNION: _attitude_quaternion,
+    TelemetryMessage.ATTITUDE_TARGET: _attitude_target,
     TelemetryMessage.HIGHRES_IMU: _imu,
     TelemetryMessage.SYS_STATUS: _sys_status,
     TelemetryMessage.GPS_RAW_INT: _gps_raw,

@@ -27,6 +27,7 @@ class TelemetryMessage(Enum):
     LOCAL_POSITION_NED = mavlink.MAVLINK_MSG_ID_LOCAL_POSITION_NED
     ATTITUDE = mavlink.MAVLINK_MSG_ID_ATTITUDE
     ATTITUDE_QUATERNION = mavlink.MAVLINK_MSG_ID_ATTITUDE_QUATERNION
+    ATTITUDE_TARGET = mavlink.MAVLINK_MSG_ID_ATTITUDE_TARGET
     HIGHRES_IMU = mavlink.MAVLINK_MSG_ID_HIGHRES_IMU
     SYS_STATUS = mavlink.MAVLINK_MSG_ID_SYS_STATUS
     GPS_RAW_INT = mavlink.MAVLINK_MSG_ID_GPS_RAW_INT
@@ -41,6 +42,7 @@ DEFAULT_RATES_HZ: Mapping[TelemetryMessage, float] = MappingProxyType({
     TelemetryMessage.LOCAL_POSITION_NED: 50.0,
     TelemetryMessage.ATTITUDE: 50.0,
     TelemetryMessage.ATTITUDE_QUATERNION: 10.0,
+    TelemetryMessage.ATTITUDE_TARGET: 10.0,
     TelemetryMessage.HIGHRES_IMU: 10.0,
     TelemetryMessage.SYS_STATUS: 2.0,
     TelemetryMessage.GPS_RAW_INT: 5.0,

@@ -298,6 +298,16 @@ class FlightConfig:
                                    default=30.0, gt=0.0)
     abort_hold: float = field(doc="after an abort, hold this long before landing, s",
                               default=1.0, ge=0.0)
+    load_sharing: bool = field(
+        doc="trim each vehicle's altitude so the payload's weight splits over four or more "
+            "ropes as at the desired shape, from the vehicles' collective thrusts "
+            "(ATTITUDE_TARGET; gcs/loop/_load_share.py)", default=True)
+    load_share_gain: float = field(
+        doc="altitude trim per unit of share off target, m (a vehicle carrying 0.1 of the "
+            "payload more than designed is lowered by a tenth of this)", default=0.1,
+        ge=0.0, le=1.0)
+    load_share_trim_max: float = field(doc="largest altitude trim of load sharing, m",
+                                       default=0.05, gt=0.0, le=0.5)
 
     def __post_init__(self) -> None:
         below, above = self.pickup_band

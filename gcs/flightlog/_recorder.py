@@ -42,7 +42,7 @@ __all__ = ["ARRAYS", "ARRAY_SPAN", "TeamHeader", "TlogRecorder", "chunked",
 
 #: First DEBUG_FLOAT_ARRAY array_id of each recorded array; each owns ARRAY_SPAN ids.
 ARRAYS = {"dist_err": 1, "acc_cmd": 101, "tilt": 301, "payload": 201, "rope_T": 211,
-          "veh_true": 221, "team": 401}
+          "veh_true": 221, "team": 401, "alt_trim": 501}
 ARRAY_SPAN = 10
 _ARRAY_LEN = 58
 _STAMP = struct.Struct(">Q")

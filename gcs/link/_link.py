@@ -50,11 +50,13 @@ DEFAULT_TELEMETRY_RATES_HZ: Mapping[str, float] = MappingProxyType({
     "LOCAL_POSITION_NED": 20.0,
     "ATTITUDE": 20.0,
     "SYS_STATUS": 1.0,
+    "ATTITUDE_TARGET": 4.0,
 })
 """What the GCS reads from a real autopilot, Hz, and asks it for when first heard
 (:meth:`Link.request_telemetry`): position and velocity for the guidance (five samples per
 4 Hz tick) and ArduPilot's vertical loop, attitude for tilt and the rope pull estimate,
-SYS_STATUS for the battery. Nothing more: a telemetry radio's bandwidth is shared."""
+SYS_STATUS for the battery, the collective thrust for load sharing (one per tick).
+Nothing more: a telemetry radio's bandwidth is shared."""
 
 
 class _PendingCommand:

@@ -11,6 +11,8 @@ Modules:
     ``_deformation``  A team deformed beyond the safe bound: hold, re-form, or land.
     ``_fleet``     The team's latest state as arrays, read from the links once per tick.
     ``_geofence``  The geofence: the team slows to a stop at it and can fly back.
+    ``_load_share``  Load sharing: each vehicle's altitude trimmed so the payload's weight
+                   splits as designed.
     ``_gamepad``   A gamepad on the GCS side: sticks, altitude, scale, guidance switch,
                    abort and resume.
     ``_operator``  The operator's command: one object written by any source, read by the 4
@@ -32,6 +34,7 @@ from gcs.loop._deformation import Deformation
 from gcs.loop._fleet import FleetState, FleetTable
 from gcs.loop._gamepad import Gamepad, load_gamepad_config
 from gcs.loop._geofence import FenceVerdict
+from gcs.loop._load_share import LoadSharing, estimated_shares, free_split
 from gcs.loop._operator import OperatorCommand, OperatorSnapshot
 from gcs.loop._phases import Action, Phase, PhaseError
 from gcs.loop._prearm import Prearm, PrearmError
@@ -52,6 +55,7 @@ __all__ = [
     "FleetTable",
     "Gamepad",
     "GatedClock",
+    "LoadSharing",
     "OperatorCommand",
     "OperatorSnapshot",
     "Phase",
@@ -65,5 +69,7 @@ __all__ = [
     "TeamFrame",
     "TickStats",
     "WallClock",
+    "estimated_shares",
+    "free_split",
     "load_gamepad_config",
 ]

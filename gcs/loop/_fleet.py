@@ -19,7 +19,14 @@ import numpy as np
 
 from gcs.common import kernel
 from gcs.link import AutopilotProfile
-from gcs.wire import Attitude, Heartbeat, LocalPosition, SystemStatus, TelemetryRecord
+from gcs.wire import (
+    Attitude,
+    Heartbeat,
+    LocalPosition,
+    SystemStatus,
+    TelemetryRecord,
+    ThrustTarget,
+)
 
 __all__ = ["FleetState", "FleetTable"]
 
@@ -39,6 +46,11 @@ class FleetState:
     armed: np.ndarray  # (n,) bool
     battery: np.ndarray  # (n,) % remaining (NaN: unknown)
     modes: tuple[str, ...]
+    thrust: np.ndarray | None = None
+    """(n,) collective thrust, 0 .. 1 of each autopilot's own scale (NaN: none heard);
+    None where no thrust is read (a replay)."""
+    thrust_age: np.ndarray | None = None
+    """(n,) s since the latest thrust (inf: never)."""
 
     @property
     def n(self) -> int:
@@ -53,7 +65,8 @@ class FleetState:
 _P, _V, _T_POS = slice(0, 3), slice(3, 6), 6  # columns of the table
 _ROLL, _PITCH, _YAW, _T_ATT = 7, 8, 9, 10
 _T_HB, _ARMED, _BATTERY = 11, 12, 13
-_COLUMNS = 14
+_THRUST, _T_THRUST = 14, 15
+_COLUMNS = 16
 
 
 class FleetTable:
@@ -73,7 +86,7 @@ class FleetTable:
         self.ids = tuple(ids)
         n = len(self.ids)
         self._rows = np.full((n, _COLUMNS), math.nan)
-        self._rows[:, _T_POS] = self._rows[:, _T_ATT] = self._rows[:, _T_HB] = -math.inf
+        self._rows[:, [_T_POS, _T_ATT, _T_HB, _T_THRUST]] = -math.inf
         self._rows[:, _ARMED] = 0.0
         self._modes = ["unknown"] * n
         self._offsets = np.zeros((n, 2))  # each local frame's place in the team frame, m
@@ -82,7 +95,7 @@ class FleetTable:
             profile = profiles[vid]
             profile.link.add_record_listener(functools.partial(self._write, i, profile))
             tel = profile.link.telemetry  # what arrived before the listener was there
-            for record in (tel.heartbeat, tel.position, tel.attitude, tel.status):
+            for record in (tel.heartbeat, tel.position, tel.attitude, tel.status, tel.thrust):
                 if record is not None:
                     self._write(i, profile, record)
 
@@ -103,6 +116,10 @@ class FleetTable:
                 if record.received_at >= rows[i, _T_HB]:
                     rows[i, 11:13] = (record.received_at, record.armed)
                     self._modes[i] = mode
+        elif isinstance(record, ThrustTarget):
+            with self._lock:
+                if record.received_at >= rows[i, _T_THRUST]:
+                    rows[i, _THRUST:_T_THRUST + 1] = (record.thrust, record.received_at)
         elif isinstance(record, SystemStatus):
             remaining = record.battery_remaining_pct
             with self._lock:
@@ -128,7 +145,8 @@ class FleetTable:
         yaw, tilt, age, heartbeat_age, armed = _derived(rows, now)
         return FleetState(t=now, ids=self.ids, p_ned=rows[:, _P], v_ned=rows[:, _V], yaw=yaw,
                           tilt=tilt, age=age, heartbeat_age=heartbeat_age, armed=armed,
-                          battery=rows[:, _BATTERY], modes=modes)
+                          battery=rows[:, _BATTERY], modes=modes, thrust=rows[:, _THRUST],
+                          thrust_age=np.maximum(now - rows[:, _T_THRUST], 0.0))
 
 
 @kernel()

@@ -58,6 +58,7 @@ from gcs.loop._clock import Clock, ClockStoppedError
 from gcs.loop._deformation import Deformation, DeformationPolicy
 from gcs.loop._fleet import FleetState, FleetTable
 from gcs.loop._geofence import FenceVerdict, fence_demand
+from gcs.loop._load_share import LoadSharing
 from gcs.loop._operator import OperatorCommand, OperatorSnapshot
 from gcs.loop._phases import Action, Phase, PhaseError, next_phase
 from gcs.loop._prearm import Prearm, PrearmError
@@ -157,6 +158,11 @@ loop's clock (their timeout is 0.5 s: the stream may have stopped before the loo
 _ON_GCS_SETPOINTS = frozenset({Phase.HOVER, Phase.LIFTING, Phase.FORMATION,
                                Phase.SETTING_DOWN})
 """Phases in which every vehicle must stay in the mode that flies the GCS's setpoints."""
+
+_CARRYING = frozenset({Phase.LIFTING, Phase.FORMATION, Phase.SETTING_DOWN})
+"""Phases in which the payload may hang from the ropes (load sharing acts in them)."""
+_SHARE_DT_MAX = 0.5
+"""Longest step of the load-sharing trims, s: a late tick does not jump them."""
 
 
 class Runtime:
@@ -283,6 +289,10 @@ class Runtime:
         self.prearm = Prearm(team, self.analysis, self.team_frame, profiles, note=self.note)
         """The checks an arm must pass."""
         self._rope_pull: tuple[float, np.ndarray] | None = None  # scale, (n, 2) body-frame pulls
+        self.load_sharing = _load_sharing(team)
+        """The altitude trims that keep the payload's split as designed (None: off, or a
+        team with no free split: three vehicles)."""
+        self._shared_at = -math.inf
 
     # -- state ---------------------------------------------------------------------------
 
@@ -535,6 +545,7 @@ class Runtime:
         demand = op.demand if moving else MotionDemand(scale=op.demand.scale)
         self._streamed = None
         fence = None
+        self._share_load(now, fleet, phase, op.demand.scale)
         if self._streams(phase):
             if self.follow_link_delay:
                 self._follow_link_delay()
@@ -555,6 +566,8 @@ class Runtime:
         phase = self.phase  # after this tick's transitions: the recorder and the snapshot agree
         if self.recorder is not None:
             arrays = {"dist_err": errors, "acc_cmd": accel, "tilt": fleet.tilt}  # NaN: unknown
+            if self.load_sharing is not None:
+                arrays["alt_trim"] = self.load_sharing.trims
             if truth is not None:
                 arrays |= {"payload": np.array(truth.payload_p_ned + truth.payload_v_ned),
                            "rope_T": np.array(truth.rope_tension),
@@ -613,6 +626,35 @@ class Runtime:
             accel, largest = np.zeros((fleet.n, 2)), 0.0
         self._send_all(accel, z_ned=-self._altitude(op))
         return accel, largest
+
+    def _share_load(self, now: float, fleet: FleetState, phase: Phase, scale: float) -> None:
+        """Move the load-sharing trims on this tick's thrusts, while every vehicle's thrust
+        is fresh and the team is high enough for the payload to hang from the ropes (above
+        the pickup band); back to zero on the ground."""
+        sharing = self.load_sharing
+        if sharing is None:
+            return
+        if not phase.airborne:
+            sharing.reset()
+            self._shared_at = -math.inf
+            return
+        dt, self._shared_at = min(now - self._shared_at, _SHARE_DT_MAX), now
+        if phase not in _CARRYING or fleet.thrust is None or fleet.thrust_age is None:
+            return
+        cfg = self.team.config
+        fresh = bool(np.all(fleet.thrust_age <= cfg.safety.stale_after)
+                     and np.all(np.isfinite(fleet.thrust)) and np.all(np.isfinite(fleet.tilt)))
+        hangs = bool(np.mean(-fleet.p_ned[:, 2])
+                     >= self.taut_altitude(scale) + cfg.flight.pickup_band[1])
+        if fresh and hangs:
+            sharing.update(dt, fleet.thrust, fleet.tilt)
+        elif hangs:
+            silent = [vid for vid, age in zip(self.ids, fleet.thrust_age, strict=True)
+                      if not age <= cfg.safety.stale_after]
+            if silent:
+                self._warn_once(("load sharing", 0), "load sharing held: no collective thrust "
+                                "(ATTITUDE_TARGET) from vehicle(s) "
+                                f"{', '.join(map(str, silent))}")
 
     def _rope_lead(self, fleet: FleetState, demand: MotionDemand,
                    accel: np.ndarray) -> np.ndarray:
@@ -753,9 +795,12 @@ class Runtime:
                 self._not_sent(i, f"altitude target not finite: {z_ned}")
             return
         vertical = np.full(len(self.ids), z_ned)
+        if self.load_sharing is not None:  # trimmed, never above the geofence's ceiling
+            vertical = np.maximum(vertical + self.load_sharing.trims,
+                                  min(z_ned, -self.team.config.safety.geofence_altitude))
         only = None
         if self._vertical_calls:  # profiles whose vertical channel is not z itself
-            only = self._vertical_from_profiles(z_ned, vertical)
+            only = self._vertical_from_profiles(vertical)
         with self._send_lock:
             wall, now = time.monotonic(), self.clock.now()
             # on the loop's clock, which the vehicles' timeouts run on (the simulator's in
@@ -771,13 +816,14 @@ class Runtime:
         for i, exc in failed.items():
             self._not_sent(i, exc)
 
-    def _vertical_from_profiles(self, z_ned: float, vertical: np.ndarray) -> list[int] | None:
-        """Fill in the vertical channel of the profiles that compute it; the rows that can
-        be sent (None: all), having reported why each other one cannot."""
+    def _vertical_from_profiles(self, vertical: np.ndarray) -> list[int] | None:
+        """Fill in the vertical channel of the profiles that compute it from each vehicle's
+        altitude target in ``vertical``; the rows that can be sent (None: all), having
+        reported why each other one cannot."""
         refused = []
         for i, vertical_setpoint in self._vertical_calls:
             try:
-                value = float(vertical_setpoint(z_ned))
+                value = float(vertical_setpoint(float(vertical[i])))
             except Exception as exc:
                 refused.append(i)
                 self._not_sent(i, exc)
@@ -955,3 +1001,20 @@ class Runtime:
         """Stop the worker threads (does not land: that is the operator's or abort's job)."""
         self.gate.close()
         self._pool.shutdown(wait=False, cancel_futures=True)
+
+
+def _load_sharing(team: Team) -> LoadSharing | None:
+    """The team's load sharing (:mod:`gcs.loop._load_share`), toward the split at the
+    desired shape; None when off, or when the team has no free split or no hanging point."""
+    fl = team.config.flight
+    if not fl.load_sharing:
+        return None
+    try:
+        target = desired_load(team).share
+    except NoHangingPointError:
+        return None
+    sharing = LoadSharing(team.formation.positions, target,
+                          vehicle_mass=team.config.airframe.mass,
+                          payload_mass=team.config.payload.mass, gain=fl.load_share_gain,
+                          trim_max=fl.load_share_trim_max)
+    return sharing if sharing.active else None

@@ -114,6 +114,7 @@ from gcs.wire._telemetry import (
     Telemetry,
     TelemetryRecord,
     TelemetryStore,
+    ThrustTarget,
 )
 from gcs.wire._unpack import unpack_v2
 
@@ -160,6 +161,7 @@ __all__ = [
     "Telemetry",
     "TelemetryRecord",
     "TelemetryStore",
+    "ThrustTarget",
     "TypeMask",
     "Unsealer",
     "accel_setpoint_fields",

@@ -37,6 +37,7 @@ __all__ = [
     "Telemetry",
     "TelemetryRecord",
     "TelemetryStore",
+    "ThrustTarget",
 ]
 
 Vec3 = tuple[float, float, float]
@@ -110,6 +111,16 @@ class Attitude:
 
 
 @dataclass(frozen=True, slots=True)
+class ThrustTarget:
+    """Latest collective thrust of ``ATTITUDE_TARGET``: what the vehicle's attitude
+    controller asks of its rotors (PX4 and ArduCopter send it), read for the rope's load."""
+
+    thrust: float
+    """Collective thrust, normalised 0 .. 1 (the autopilot's own scale)."""
+    received_at: float
+
+
+@dataclass(frozen=True, slots=True)
 class Imu:
     """Latest ``HIGHRES_IMU``."""
 
@@ -160,7 +171,8 @@ _SETPOINTS_LOST = re.compile(r"offboard.*(lost|loss|signal|timeout)|setpoints? (
                              re.IGNORECASE)
 
 
-TelemetryRecord = Heartbeat | LocalPosition | Attitude | Imu | SystemStatus | StatusText
+TelemetryRecord = (Heartbeat | LocalPosition | Attitude | Imu | SystemStatus | StatusText
+                   | ThrustTarget)
 """Any one telemetry record."""
 
 
@@ -176,6 +188,7 @@ class Telemetry:
     status: SystemStatus | None
     status_texts: tuple[StatusText, ...]
     """Most recent status texts, oldest first."""
+    thrust: ThrustTarget | None = None
 
 
 class TelemetryStore:
@@ -188,6 +201,7 @@ class TelemetryStore:
         self.attitude: Attitude | None = None
         self.imu: Imu | None = None
         self.status: SystemStatus | None = None
+        self.thrust: ThrustTarget | None = None
         self._texts: deque[StatusText] = deque(maxlen=status_text_history)
         self.refused = 0
         """Telemetry messages refused: a value not finite or beyond :data:`TELEMETRY_MAX_ABS`."""
@@ -199,6 +213,7 @@ class TelemetryStore:
             "HIGHRES_IMU": self._imu,
             "SYS_STATUS": self._sys_status,
             "STATUSTEXT": self._status_text,
+            "ATTITUDE_TARGET": self._thrust,
         }
 
     def update(self, msg: MavMessage, now: float) -> TelemetryRecord | None:
@@ -215,7 +230,7 @@ class TelemetryStore:
     def snapshot(self) -> Telemetry:
         """The current records as one immutable snapshot."""
         return Telemetry(self.sysid, self.heartbeat, self.position, self.attitude, self.imu,
-                         self.status, tuple(self._texts))
+                         self.status, tuple(self._texts), self.thrust)
 
     def _heartbeat(self, m: MavMessage, now: float) -> Heartbeat:
         self.heartbeat = Heartbeat(bool(m.base_mode & SAFETY_ARMED), m.base_mode, m.custom_mode,
@@ -245,6 +260,14 @@ class TelemetryStore:
                                  m.time_boot_ms / 1000.0, now)
         return self.attitude
 
+    def _thrust(self, m: MavMessage, now: float) -> ThrustTarget | None:
+        """A thrust outside 0 .. 1, or one the sender marks as ignored (type_mask bit 6),
+        is none."""
+        if m.type_mask & _THRUST_IGNORED or not 0.0 <= m.thrust <= 1.0:
+            return None
+        self.thrust = ThrustTarget(float(m.thrust), now)
+        return self.thrust
+
     def _imu(self, m: MavMessage, now: float) -> Imu | None:
         accel, gyro = (m.xacc, m.yacc, m.zacc), (m.xgyro, m.ygyro, m.zgyro)
         if not _usable(*accel, *gyro):
@@ -273,6 +296,10 @@ class TelemetryStore:
         record = StatusText(severity, text, now)
         self._texts.append(record)
         return record
+
+
+_THRUST_IGNORED = 64
+"""``ATTITUDE_TARGET_TYPEMASK_THROTTLE_IGNORE``."""
 
 
 def _usable(*values: float) -> bool:

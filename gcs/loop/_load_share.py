@@ -1,0 +1,100 @@
+"""Load sharing: each vehicle's altitude trimmed so the payload's weight splits as designed.
+
+Why: four or more taut ropes hold a point payload with more ropes than its balance
+needs, and the split between them is decided by the ropes' stretch: on the paper's
+square a diagonal pair 0.2 mm higher than the other carries twice its load (in the
+simulator, whose autopilots hold their altitude to a fraction of a millimetre, the
+pairs flew at 0.33 and 0.17 of the payload for tens of seconds; real vehicles' heights
+differ by centimetres, enough to leave a diagonal slack). The analysis certifies each
+vehicle for its design share only if something keeps the split there.
+
+The GCS reads each vehicle's collective thrust (``ATTITUDE_TARGET``, which PX4 and
+ArduCopter send), and with one airframe for the team the thrusts give the split
+without knowing the thrust's scale: a vehicle's vertical thrust is its own weight plus
+its rope's pull, and the team's together carry the vehicles and the payload
+(:func:`estimated_shares`). The part of the split the payload's balance leaves free
+(:func:`free_split`: load moved between ropes with the same total and the same
+moments) is driven to the split at the desired shape by an integral on each vehicle's
+altitude setpoint: a vehicle carrying more than its share is lowered, slowly
+(``flight.load_share_gain``) and never more than ``flight.load_share_trim_max``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["FILTER_S", "LoadSharing", "estimated_shares", "free_split"]
+
+FILTER_S = 1.0
+"""Time constant of the trims' approach to their target, s."""
+
+
+def free_split(xy: np.ndarray) -> np.ndarray:
+    """(n, n) projector onto the vertical loads that leave a payload's balance unchanged:
+    no total, no moment about any horizontal axis; ``xy`` (n, 2) the vehicles' horizontal
+    places, in any frame and at any scale and heading of one shape (the span of the
+    balance's rows does not change). Zero for three vehicles or fewer not on a line."""
+    n = len(xy)
+    balance = np.vstack([np.ones(n), xy[:, 0], xy[:, 1]])
+    return np.eye(n) - np.linalg.pinv(balance) @ balance
+
+
+def estimated_shares(thrust: np.ndarray, tilt: np.ndarray, vehicle_mass: float,
+                     payload_mass: float) -> np.ndarray:
+    """(n,) fraction of the payload's weight on each vehicle, from each one's collective
+    thrust (any common scale) and tilt (rad), for vehicles of one airframe in steady
+    flight: the vertical thrusts add up to (n m + M) g, of which m g is each vehicle's."""
+    vertical = thrust * np.cos(tilt)
+    n = len(vertical)
+    total = float(vertical.sum())
+    return (vertical * (n * vehicle_mass + payload_mass) / total - vehicle_mass) / payload_mass
+
+
+class LoadSharing:
+    """The altitude trims of one team (z down, m); not thread-safe (the loop's tick).
+
+    Args:
+        xy: (n, 2) the desired shape's places.
+        target: (n,) the share of the payload's weight each vehicle carries at the desired
+            shape (the analysis' split at rest).
+        vehicle_mass, payload_mass: kg.
+        gain: trim rate per unit of share off target, m/s.
+        trim_max: largest trim, m (the trims shrink together, so they still move load
+            only between ropes).
+    """
+
+    def __init__(self, xy: np.ndarray, target: np.ndarray, *, vehicle_mass: float,
+                 payload_mass: float, gain: float, trim_max: float) -> None:
+        self._free = free_split(np.asarray(xy, dtype=float))
+        self._target = np.asarray(target, dtype=float)
+        self._masses = (vehicle_mass, payload_mass)
+        self.gain, self.trim_max = gain, trim_max
+        self.trims = np.zeros(len(self._target))
+        """(n,) the current altitude trims, m, z down: added to each vehicle's setpoint."""
+        self.active = bool(np.abs(self._free).max() > 1e-9) and gain > 0.0
+        """Whether the team has a free split to share (four or more vehicles, not a line)."""
+
+    def update(self, dt: float, thrust: np.ndarray, tilt: np.ndarray) -> np.ndarray:
+        """Move the trims ``dt`` seconds on the latest thrusts and tilts (finite, every
+        vehicle's: the caller checks they are fresh and the payload hangs); the trims."""
+        if not self.active or not (math.isfinite(dt) and dt > 0.0):
+            return self.trims
+        shares = estimated_shares(thrust, tilt, *self._masses)
+        if not np.all(np.isfinite(shares)):
+            return self.trims
+        off = self._free @ (shares - self._target)
+        step = min(1.0, dt / FILTER_S)
+        self.trims = self.trims + step * (self.gain * off - self.trims)
+        return self._bounded()
+
+    def _bounded(self) -> np.ndarray:
+        largest = float(np.abs(self.trims).max())
+        if largest > self.trim_max:  # shrunk whole: a trim that stays a free split
+            self.trims *= self.trim_max / largest
+        return self.trims
+
+    def reset(self) -> None:
+        """Every trim back to zero (a new flight)."""
+        self.trims = np.zeros_like(self.trims)
