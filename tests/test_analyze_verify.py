@@ -56,9 +56,10 @@ def _team(tmp_path: Path, **changes: dict[str, float]) -> Path:
 
 
 def test_the_square_is_flown_on_two_seeds_and_held_to_its_analysis() -> None:
-    out = run_gcs("analyze", SQUARE, "--verify", "--scenario", SHORT, "--seeds", "1-2",
-                  "--jobs", "2")
-    assert out.returncode in (0, 1), out.stderr
+    """The paper flight on the two seeds that came nearest the bounds (share and tension
+    on seed 3, span on seed 2): every figure within the certificate."""
+    out = run_gcs("analyze", SQUARE, "--verify", "--seeds", "2-3", "--jobs", "2")
+    assert out.returncode == 0, out.stdout + out.stderr
     rows = _rows(out.stdout)
     assert list(rows) == [f.label for f in FIGURES], out.stdout
     analysis = json.loads(run_gcs("analyze", SQUARE, "--json").stdout)
@@ -74,7 +75,7 @@ def test_the_square_is_flown_on_two_seeds_and_held_to_its_analysis() -> None:
         assert float(r["margin"]) == pytest.approx(
             float(r["predicted"]) - float(r["measured"]), abs=2e-3)
         assert r["verdict"] == ("OK" if float(r["margin"]) >= 0 else "EXCEEDED")
-        assert r["seed"] in ("1", "2")
+        assert r["seed"] in ("2", "3")
     # the payload was carried (the paper's square hangs a quarter of it on each rope, a
     # little more while it swings) and no vehicle came near the analysis' load bounds
     share = float(rows[FIGURES[0].label]["measured"])
@@ -82,10 +83,9 @@ def test_the_square_is_flown_on_two_seeds_and_held_to_its_analysis() -> None:
     for label in (FIGURES[0].label, FIGURES[1].label, FIGURES[3].label,
                   "tilt <= bank limit"):
         assert rows[label]["verdict"] == "OK", out.stdout
-    exceeded = [label for label, r in rows.items() if r["verdict"] == "EXCEEDED"]
-    assert out.returncode == (1 if exceeded else 0), out.stdout
-    assert ("result: OK" in out.stdout) == (not exceeded)
-    assert "seed 1 completed" in out.stderr and "seed 2 completed" in out.stderr
+    assert all(r["verdict"] == "OK" for r in rows.values()), out.stdout
+    assert "result: OK" in out.stdout
+    assert "seed 2 completed" in out.stderr and "seed 3 completed" in out.stderr
     assert "2 at a time" in out.stdout
 
 

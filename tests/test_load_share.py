@@ -14,7 +14,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from gcs.analysis import desired_load
+from gcs.analysis import analyze, desired_load
 from gcs.common import STANDARD_GRAVITY
 from gcs.config import Team, load_team
 from gcs.loop import LoadSharing, estimated_shares, free_split
@@ -113,3 +113,14 @@ def test_load_sharing_keeps_the_square_within_its_design_share() -> None:
     alone = _worst_share(_with_flight(team, load_sharing=False))
     assert shared < design - 0.02, shared  # 0.304 measured
     assert alone > design, alone  # 0.357 measured
+
+
+def test_the_analysis_says_the_design_share_needs_load_sharing() -> None:
+    square = load_team(SQUARE)
+    said = [w for w in analyze(_with_flight(square, load_sharing=False)).warnings
+            if "flight.load_sharing is off" in w]
+    assert len(said) == 1 and "only the worst share 0.524 holds" in said[0], said
+    assert not any("load_sharing" in w for w in analyze(square).warnings)
+    # three ropes: the split is the balance's own, with or without load sharing
+    triangle = _with_flight(load_team(TRIANGLE), load_sharing=False)
+    assert not any("load_sharing" in w for w in analyze(triangle).warnings)
