@@ -131,12 +131,18 @@ class ViewControls:
         self._set: collections.deque[np.ndarray] = collections.deque(maxlen=16)
         self._set_at: collections.deque[np.ndarray] = collections.deque(maxlen=16)  # positions
         self._viewer_at = -math.inf  # when the viewer last moved the camera (monotonic s)
+        self._hand: tuple[np.ndarray, np.ndarray] | None = None  # the last view update()
+        # took for the viewer's hand (look_at, position): its report counts once
         client.camera.on_update(self._on_report)
 
     def _on_report(self, camera: viser.CameraHandle) -> None:
         """The browser said where its camera is (viser's thread pool): a view this one set,
         or the viewer's own hand on the camera."""
         look_at = np.array(camera.look_at, dtype=float)
+        with self._lock:
+            hand = self._hand
+        if hand is not None and _same(look_at, hand[0]) and _same(camera.position, hand[1]):
+            return  # the frame loop already took this view for the viewer's hand
         if not self._was_set(look_at):
             if not _page_view(look_at):  # the page's own view is no hand of the viewer
                 self._viewer_at = self.clock()
@@ -187,6 +193,11 @@ class ViewControls:
         if not self.follow.value:
             self._pan = None
             return
+        if not was_set:  # the viewer's own view, seen here before viser's thread ran
+            # _on_report for it (a loaded machine): the hand is on the camera from now
+            self._viewer_at = max(self._viewer_at, self.clock())
+            with self._lock:
+                self._hand = (look_at, np.array(camera.position, dtype=float))
         if self._pan is None or not was_set:
             self._pan = look_at - centroid  # follow from here: the viewer's own view
             self._known(look_at)  # known from now on, as the ones this view set
@@ -219,6 +230,10 @@ class ViewControls:
         with self.client.atomic():
             camera.position = position
             camera.look_at = look_at
+
+
+def _same(a: np.ndarray, b: np.ndarray) -> bool:
+    return float(np.max(np.abs(np.asarray(a, dtype=float) - b))) < _MATCH
 
 
 def _page_view(look_at: np.ndarray) -> bool:
