@@ -256,9 +256,10 @@ def test_telemetry_that_is_not_finite_is_refused_and_counted() -> None:
            mav.attitude_quaternion_encode(10, math.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
            mav.local_position_ned_encode(10, 0.0, -math.inf, 0.0, 0.0, 0.0, 0.0),
            mav.highres_imu_encode(10, math.nan, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0)]
-    # a collective thrust is a fraction of the autopilot's full thrust (load sharing)
+    # a collective thrust is a fraction of the autopilot's full thrust (load sharing),
+    # negative for reverse thrust (MAVLink's -1 .. 1; ArduCopter touching down: -0.17)
     bad += [mav.attitude_target_encode(10, 0, (1.0, 0.0, 0.0, 0.0), 0.0, 0.0, 0.0, thrust)
-            for thrust in (math.nan, math.inf, -0.01, 1.01, 3e38)]
+            for thrust in (math.nan, math.inf, -1.01, 1.01, 3e38)]
     bad.append(mav.attitude_target_encode(10, 64, (1.0, 0.0, 0.0, 0.0), 0.0, 0.0, 0.0, 0.5))
     for msg in bad:
         (decoded,) = decoder.feed(vehicle.encode(msg))
@@ -272,6 +273,11 @@ def test_telemetry_that_is_not_finite_is_refused_and_counted() -> None:
     kept = store.update(thrust, 1.0)
     assert kept is not None and store.snapshot().thrust == kept
     assert kept.thrust == pytest.approx(0.55)
+    (landing,) = decoder.feed(vehicle.encode(mav.attitude_target_encode(
+        10, 0, (1.0, 0.0, 0.0, 0.0), 0.0, 0.0, 0.0, -0.17)))
+    kept = store.update(landing, 1.0)
+    assert kept is not None and kept.thrust == pytest.approx(-0.17)
+    assert store.refused == len(bad)
     (good,) = decoder.feed(vehicle.encode(mav.attitude_encode(10, 0.1, 0.0, 0.0, 0.0, 0.0, 0.0)))
     record = store.update(good, 1.0)
     assert record is not None and record.rpy[0] == pytest.approx(0.1)

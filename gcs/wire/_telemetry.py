@@ -116,7 +116,8 @@ class ThrustTarget:
     controller asks of its rotors (PX4 and ArduCopter send it), read for the rope's load."""
 
     thrust: float
-    """Collective thrust, normalised 0 .. 1 (the autopilot's own scale)."""
+    """Collective thrust, normalised 0 .. 1 of the autopilot's own scale (-1 .. 0: reverse
+    thrust, or a copter spooling down on the ground)."""
     received_at: float
 
 
@@ -261,9 +262,10 @@ class TelemetryStore:
         return self.attitude
 
     def _thrust(self, m: MavMessage, now: float) -> ThrustTarget | None:
-        """A thrust outside 0 .. 1, or one the sender marks as ignored (type_mask bit 6),
-        is none."""
-        if m.type_mask & _THRUST_IGNORED or not 0.0 <= m.thrust <= 1.0:
+        """A thrust outside MAVLink's -1 .. 1 (reverse thrust below 0; ArduCopter reports
+        down to -0.17 while it touches down), or one the sender marks as ignored (type_mask
+        bit 6), is none."""
+        if m.type_mask & _THRUST_IGNORED or not -1.0 <= m.thrust <= 1.0:
             return None
         self.thrust = ThrustTarget(float(m.thrust), now)
         return self.thrust
