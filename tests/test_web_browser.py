@@ -523,7 +523,10 @@ def test_a_viewer_that_stops_receiving_says_stale_and_reconnects(browser, pilot,
         print(f"stopped for good: reconnected, fresh {back:.2f} s after the stop "
               f"({freshness(page)['reconnects']} forced reconnect(s), new sockets {sockets})")
         assert len(sockets) >= 1, sockets
-        assert back > RECONNECT_AFTER_S, back
+        # it waited for the reconnect timeout, which runs from the last beat the page had:
+        # that came before the stop (by up to a beat period, more on a loaded machine:
+        # 2.997 s was seen with two CPU hogs), never a reconnect at once
+        assert back > RECONNECT_AFTER_S - STALE_AFTER_S, back
     finally:
         page.context.close()
         relay.close()
