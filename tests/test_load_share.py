@@ -62,6 +62,18 @@ def test_the_shares_come_from_the_thrusts_whatever_their_scale() -> None:
         assert np.allclose(estimated_shares(scale * thrust_n, tilt, vehicle, payload), shares)
 
 
+def test_thrusts_that_hold_nobody_up_move_no_trim() -> None:
+    """On the ground (or from a hostile peer) the thrusts may be zero or reverse: no share,
+    no trim, nothing on stderr."""
+    assert np.isnan(estimated_shares(np.zeros(4), np.zeros(4), 0.4, 0.4)).all()
+    team = load_team(SQUARE)
+    sharing = LoadSharing(team.formation.positions, desired_load(team).share,
+                          vehicle_mass=0.4, payload_mass=0.4, gain=0.1, trim_max=0.05)
+    with np.errstate(all="raise"):  # a division by zero would raise here
+        trims = sharing.update(0.25, np.array([-0.1, 0.0, 0.05, 0.0]), np.zeros(4))
+    assert not trims.any()
+
+
 def test_the_more_loaded_diagonal_is_lowered_and_the_trims_stay_a_free_split() -> None:
     team = load_team(SQUARE)
     xy = team.formation.positions

@@ -149,7 +149,7 @@ class ViewControls:
             return
         with self._lock:
             placed = list(self._set_at)
-        if not any(float(np.max(np.abs(camera.position - p))) < _MATCH for p in placed):
+        if not any(_same(camera.position, p) for p in placed):
             self._viewer_at = self.clock()  # orbiting or zooming about our point
         self._shown = True
 
@@ -211,7 +211,7 @@ class ViewControls:
     def _was_set(self, look_at: np.ndarray) -> bool:
         with self._lock:  # the reports come on viser's threads
             known = list(self._set)
-        return any(float(np.max(np.abs(look_at - s))) < _MATCH for s in known)
+        return any(_same(look_at, s) for s in known)
 
     def _known(self, look_at: np.ndarray) -> None:
         with self._lock:
@@ -233,9 +233,10 @@ class ViewControls:
 
 
 def _same(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two camera points are one (within :data:`_MATCH` on every axis)."""
     return float(np.max(np.abs(np.asarray(a, dtype=float) - b))) < _MATCH
 
 
 def _page_view(look_at: np.ndarray) -> bool:
     """The point looked at is the page's own first view's (unless this view set it)."""
-    return float(np.max(np.abs(look_at - _PAGE_LOOK_AT))) < _MATCH
+    return _same(look_at, _PAGE_LOOK_AT)

@@ -47,7 +47,8 @@ class FleetState:
     battery: np.ndarray  # (n,) % remaining (NaN: unknown)
     modes: tuple[str, ...]
     thrust: np.ndarray | None = None
-    """(n,) collective thrust, 0 .. 1 of each autopilot's own scale (NaN: none heard);
+    """(n,) collective thrust, 0 .. 1 of each autopilot's own scale (below 0: reverse or
+    spooling down; NaN: none heard);
     None where no thrust is read (a replay)."""
     thrust_age: np.ndarray | None = None
     """(n,) s since the latest thrust (inf: never)."""

@@ -14,9 +14,11 @@ without knowing the thrust's scale: a vehicle's vertical thrust is its own weigh
 its rope's pull, and the team's together carry the vehicles and the payload
 (:func:`estimated_shares`). The part of the split the payload's balance leaves free
 (:func:`free_split`: load moved between ropes with the same total and the same
-moments) is driven to the split at the desired shape by an integral on each vehicle's
-altitude setpoint: a vehicle carrying more than its share is lowered, slowly
-(``flight.load_share_gain``) and never more than ``flight.load_share_trim_max``.
+moments) is driven to the split at the desired shape by a trim of each vehicle's
+altitude setpoint in proportion to its excess share (``flight.load_share_gain``),
+approached over :data:`FILTER_S` and never more than ``flight.load_share_trim_max``:
+a vehicle carrying more than its share is lowered. (An integral trim oscillated: the
+split answers a trim only as the guidance moves the shape, over tens of seconds.)
 """
 
 from __future__ import annotations
@@ -45,10 +47,13 @@ def estimated_shares(thrust: np.ndarray, tilt: np.ndarray, vehicle_mass: float,
                      payload_mass: float) -> np.ndarray:
     """(n,) fraction of the payload's weight on each vehicle, from each one's collective
     thrust (any common scale) and tilt (rad), for vehicles of one airframe in steady
-    flight: the vertical thrusts add up to (n m + M) g, of which m g is each vehicle's."""
+    flight: the vertical thrusts add up to (n m + M) g, of which m g is each vehicle's.
+    NaN where the thrusts hold nobody up (none positive in total: on the ground)."""
     vertical = thrust * np.cos(tilt)
     n = len(vertical)
     total = float(vertical.sum())
+    if not total > 0.0:
+        return np.full(n, math.nan)
     return (vertical * (n * vehicle_mass + payload_mass) / total - vehicle_mass) / payload_mass
 
 
@@ -60,7 +65,7 @@ class LoadSharing:
         target: (n,) the share of the payload's weight each vehicle carries at the desired
             shape (the analysis' split at rest).
         vehicle_mass, payload_mass: kg.
-        gain: trim rate per unit of share off target, m/s.
+        gain: trim per unit of share off target, m.
         trim_max: largest trim, m (the trims shrink together, so they still move load
             only between ropes).
     """
