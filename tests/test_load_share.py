@@ -10,19 +10,24 @@ simulator's clock and are the same whatever the machine's load.
 from __future__ import annotations
 
 import dataclasses
+import tempfile
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from gcs.analysis import analyze, desired_load
+from gcs.app import measure_flight
 from gcs.common import STANDARD_GRAVITY
 from gcs.config import Team, load_team
+from gcs.flightlog import FlightLog
 from gcs.loop import LoadSharing, estimated_shares, free_split
 from gcs.testing import SimTeam
 from tests.conftest import SQUARE
 
 TRIANGLE = "configs/bebop_triangle.yaml"
 HEXAGON = "configs/bebop_hexagon.yaml"
+PENTAGON = "tests/data/bebop_pentagon.yaml"
 
 
 def _with_flight(team: Team, **changes: object) -> Team:
@@ -98,6 +103,55 @@ def test_the_more_loaded_diagonal_is_lowered_and_the_trims_stay_a_free_split() -
     assert not sharing.trims.any()
 
 
+def test_the_slack_rope_thrusts_give_the_split_while_the_payload_is_picked_up() -> None:
+    """Each vehicle's thrust with its rope slack is its own weight in its own units: above
+    it is its rope's pull, so a half-lifted payload split as designed is no excess, and a
+    vehicle heavier than the others (another battery) is not taken for a loaded one."""
+    team = load_team(SQUARE)
+    xy = team.formation.positions
+    target = desired_load(team).share
+    vehicle, payload = 0.4, 0.4
+    own = np.array([1.0, 1.0, 1.05, 1.0]) * vehicle  # vehicle 3 is 5 % heavier
+    sharing = LoadSharing(xy, target, vehicle_mass=vehicle, payload_mass=payload, gain=0.4,
+                          trim_max=0.05)
+    tilt = np.zeros(4)
+    assert sharing.slack is None
+    for _ in range(40):  # 10 s of hover, ropes slack
+        sharing.observe_slack(0.25, own * 12.0, tilt)  # thrust in any common unit
+    assert sharing.slack is not None and np.allclose(sharing.slack, own * 12.0)
+    half = own + 0.5 * payload * target  # half the payload up, split as designed
+    assert np.allclose(sharing.excess(half * 12.0, tilt), 0.0, atol=1e-12)
+    uneven = own + 0.5 * payload * np.array([0.33, 0.17, 0.33, 0.17])
+    assert np.allclose(sharing.excess(uneven * 12.0, tilt),  # scale: the mean vehicle's
+                       0.5 * (np.array([0.33, 0.17, 0.33, 0.17]) - target), rtol=0.02)
+    # the thrusts' ratios alone read the heavier vehicle's weight as load on its rope
+    hung = own + payload * target
+    assert estimated_shares(hung, tilt, vehicle, payload)[2] > target[2] + 0.03  # 0.287
+    assert np.allclose(sharing.excess(hung * 12.0, tilt), 0.0, atol=1e-12)
+    sharing.reset()
+    assert sharing.slack is None
+
+
+def test_load_sharing_lets_the_first_taut_rope_down_before_the_payload_leaves() -> None:
+    """A pentagon tied by seven edges holds the vehicle with four stiffest as the climbing
+    ropes drag the shape inward through the pickup band: that rope goes taut first. With
+    the trims acting from the bottom of the band (on slack-rope thrusts learnt in hover)
+    it carried 0.345 of the payload at lift-off; acting only once the payload hung, 0.405
+    (design 0.25 - why this team is not yet one the certificate holds for)."""
+    team = load_team(PENTAGON)
+    weight = team.config.payload.mass * STANDARD_GRAVITY
+    with tempfile.TemporaryDirectory() as tmp:
+        record = Path(tmp) / "pentagon.tlog"
+        with SimTeam(team, seed=1, record=record) as flight:
+            flight.arm()
+            flight.takeoff()
+            flight.lift()
+            sharing = flight.app.runtime.load_sharing
+            assert sharing is not None and sharing.slack is not None  # learnt in hover
+        share = measure_flight(FlightLog.load(record), weight).share
+    assert share is not None and share < 0.37, share
+
+
 def _worst_share(team: Team) -> float:
     """The largest share of the payload's weight one rope carried in 20 s after the square
     flew forward and back, the payload up (truth)."""
@@ -123,7 +177,7 @@ def test_load_sharing_keeps_the_square_within_its_design_share() -> None:
     design = 1.0 / 3.0  # the paper's 1/(n-1), what the analysis designs the square for
     shared = _worst_share(team)
     alone = _worst_share(_with_flight(team, load_sharing=False))
-    assert shared < design - 0.02, shared  # 0.304 measured
+    assert shared < design - 0.02, shared  # 0.285 measured (0.304 at a gain of 0.1)
     assert alone > design, alone  # 0.357 measured
 
 

@@ -304,7 +304,7 @@ class FlightConfig:
             "(ATTITUDE_TARGET; gcs/loop/_load_share.py)", default=True)
     load_share_gain: float = field(
         doc="altitude trim per unit of share off target, m (a vehicle carrying 0.1 of the "
-            "payload more than designed is lowered by a tenth of this)", default=0.1,
+            "payload more than designed is lowered by a tenth of this)", default=0.4,
         ge=0.0, le=1.0)
     load_share_trim_max: float = field(doc="largest altitude trim of load sharing, m",
                                        default=0.05, gt=0.0, le=0.5)

@@ -9,16 +9,23 @@ differ by centimetres, enough to leave a diagonal slack). The analysis certifies
 vehicle for its design share only if something keeps the split there.
 
 The GCS reads each vehicle's collective thrust (``ATTITUDE_TARGET``, which PX4 and
-ArduCopter send), and with one airframe for the team the thrusts give the split
-without knowing the thrust's scale: a vehicle's vertical thrust is its own weight plus
-its rope's pull, and the team's together carry the vehicles and the payload
-(:func:`estimated_shares`). The part of the split the payload's balance leaves free
-(:func:`free_split`: load moved between ropes with the same total and the same
-moments) is driven to the split at the desired shape by a trim of each vehicle's
-altitude setpoint in proportion to its excess share (``flight.load_share_gain``),
-approached over :data:`FILTER_S` and never more than ``flight.load_share_trim_max``:
-a vehicle carrying more than its share is lowered. (An integral trim oscillated: the
-split answers a trim only as the guidance moves the shape, over tens of seconds.)
+ArduCopter send). Each vehicle's thrust with its rope slack (hovering below the
+taut-rope altitude: :meth:`LoadSharing.observe_slack`) is what holds it up alone; above
+that, the rest is its rope's pull, in the vehicle's own thrust units, so the split is
+known while the payload is still being picked up, and a vehicle a little heavier than
+the others (another battery) is not taken for one carrying more. Without that hover
+(a GCS that joined a flight in the air) the thrusts give the split with one airframe
+for the team, the payload hanging (:func:`estimated_shares`). The part of the split the
+payload's balance leaves free (:func:`free_split`: load moved between ropes with the
+same total and the same moments) is driven to the split at the desired shape by a trim
+of each vehicle's altitude setpoint in proportion to its excess share
+(``flight.load_share_gain``), approached over :data:`FILTER_S` and never more than
+``flight.load_share_trim_max``: a vehicle carrying more than its share is lowered. The
+trims act from the bottom of the pickup band, so the rope that goes taut first (the
+vehicle the shape holds furthest out) is let down before it takes the payload alone: on
+a pentagon acting only once the payload hung left one rope at 0.40 of the payload at
+lift-off against a design 0.25. (An integral trim oscillated: the split answers a trim
+only as the guidance moves the shape, over tens of seconds.)
 """
 
 from __future__ import annotations
@@ -27,10 +34,13 @@ import math
 
 import numpy as np
 
-__all__ = ["FILTER_S", "LoadSharing", "estimated_shares", "free_split"]
+__all__ = ["FILTER_S", "SLACK_S", "LoadSharing", "estimated_shares", "free_split"]
 
 FILTER_S = 1.0
 """Time constant of the trims' approach to their target, s."""
+
+SLACK_S = 2.0
+"""Time constant of the average of each vehicle's thrust with its rope slack, s."""
 
 
 def free_split(xy: np.ndarray) -> np.ndarray:
@@ -80,16 +90,42 @@ class LoadSharing:
         """(n,) the current altitude trims, m, z down: added to each vehicle's setpoint."""
         self.active = bool(np.abs(self._free).max() > 1e-9) and gain > 0.0
         """Whether the team has a free split to share (four or more vehicles, not a line)."""
+        self.slack: np.ndarray | None = None
+        """(n,) each vehicle's vertical thrust with its rope slack (its units), or None
+        before any such hover."""
+
+    def observe_slack(self, dt: float, thrust: np.ndarray, tilt: np.ndarray) -> None:
+        """Average each vehicle's vertical thrust over ``dt`` seconds with every rope slack
+        (airborne, below the taut-rope altitude): what holds each up alone."""
+        vertical = np.asarray(thrust, dtype=float) * np.cos(tilt)
+        if not (np.all(np.isfinite(vertical)) and np.all(vertical > 0.0)
+                and math.isfinite(dt) and dt > 0.0):
+            return
+        if self.slack is None:
+            self.slack = vertical
+        else:
+            self.slack = self.slack + min(1.0, dt / SLACK_S) * (vertical - self.slack)
+
+    def excess(self, thrust: np.ndarray, tilt: np.ndarray) -> np.ndarray:
+        """(n,) each vehicle's load beyond its share of what the ropes now carry, as a
+        fraction of the payload's weight (NaN where not known): from the thrusts above
+        each one's slack-rope thrust, or without it from the thrusts' ratios."""
+        if self.slack is None:
+            return estimated_shares(thrust, tilt, *self._masses) - self._target
+        vehicle_mass, payload_mass = self._masses
+        pull = np.asarray(thrust, dtype=float) * np.cos(tilt) - self.slack
+        weight = float(self.slack.mean()) * payload_mass / vehicle_mass  # in thrust units
+        return (pull - self._target * float(pull.sum())) / weight
 
     def update(self, dt: float, thrust: np.ndarray, tilt: np.ndarray) -> np.ndarray:
         """Move the trims ``dt`` seconds on the latest thrusts and tilts (finite, every
-        vehicle's: the caller checks they are fresh and the payload hangs); the trims."""
+        vehicle's: the caller checks they are fresh and the ropes may be taut); the trims."""
         if not self.active or not (math.isfinite(dt) and dt > 0.0):
             return self.trims
-        shares = estimated_shares(thrust, tilt, *self._masses)
-        if not np.all(np.isfinite(shares)):
+        excess = self.excess(thrust, tilt)
+        if not np.all(np.isfinite(excess)):
             return self.trims
-        off = self._free @ (shares - self._target)
+        off = self._free @ excess
         step = min(1.0, dt / FILTER_S)
         self.trims = self.trims + step * (self.gain * off - self.trims)
         return self._bounded()
@@ -101,5 +137,6 @@ class LoadSharing:
         return self.trims
 
     def reset(self) -> None:
-        """Every trim back to zero (a new flight)."""
+        """Every trim back to zero and the slack thrusts forgotten (a new flight)."""
         self.trims = np.zeros_like(self.trims)
+        self.slack = None

@@ -161,6 +161,9 @@ _ON_GCS_SETPOINTS = frozenset({Phase.HOVER, Phase.LIFTING, Phase.FORMATION,
 
 _CARRYING = frozenset({Phase.LIFTING, Phase.FORMATION, Phase.SETTING_DOWN})
 """Phases in which the payload may hang from the ropes (load sharing acts in them)."""
+_SLACK_HOVER = frozenset({Phase.HOVER, Phase.LIFTING, Phase.FORMATION})
+"""Phases whose thrusts below the taut-rope altitude are each vehicle's own weight (not
+the take-off's or the landing's climb and descent)."""
 _SHARE_DT_MAX = 0.5
 """Longest step of the load-sharing trims, s: a late tick does not jump them."""
 
@@ -629,8 +632,9 @@ class Runtime:
 
     def _share_load(self, now: float, fleet: FleetState, phase: Phase, scale: float) -> None:
         """Move the load-sharing trims on this tick's thrusts, while every vehicle's thrust
-        is fresh and the team is high enough for the payload to hang from the ropes (above
-        the pickup band); back to zero on the ground."""
+        is fresh: each one's slack-rope thrust learnt below the pickup band, the trims moved
+        from its bottom up (where the ropes start to take the payload); back to zero on the
+        ground."""
         sharing = self.load_sharing
         if sharing is None:
             return
@@ -639,22 +643,28 @@ class Runtime:
             self._shared_at = -math.inf
             return
         dt, self._shared_at = min(now - self._shared_at, _SHARE_DT_MAX), now
-        if phase not in _CARRYING or fleet.thrust is None or fleet.thrust_age is None:
+        if fleet.thrust is None or fleet.thrust_age is None:
             return
         cfg = self.team.config
         fresh = bool(np.all(fleet.thrust_age <= cfg.safety.stale_after)
                      and np.all(np.isfinite(fleet.thrust)) and np.all(np.isfinite(fleet.tilt)))
-        hangs = bool(np.mean(-fleet.p_ned[:, 2])
-                     >= self.taut_altitude(scale) + cfg.flight.pickup_band[1])
-        if fresh and hangs:
+        altitude = float(np.mean(-fleet.p_ned[:, 2]))
+        bottom = self.taut_altitude(scale) - cfg.flight.pickup_band[0]
+        if altitude < bottom:  # every rope slack
+            if fresh and phase in _SLACK_HOVER:
+                sharing.observe_slack(dt, fleet.thrust, fleet.tilt)
+            return
+        if phase not in _CARRYING or altitude < bottom:
+            return
+        if fresh:
             sharing.update(dt, fleet.thrust, fleet.tilt)
-        elif hangs:
-            silent = [vid for vid, age in zip(self.ids, fleet.thrust_age, strict=True)
-                      if not age <= cfg.safety.stale_after]
-            if silent:
-                self._warn_once(("load sharing", 0), "load sharing held: no collective thrust "
-                                "(ATTITUDE_TARGET) from vehicle(s) "
-                                f"{', '.join(map(str, silent))}")
+            return
+        silent = [vid for vid, age in zip(self.ids, fleet.thrust_age, strict=True)
+                  if not age <= cfg.safety.stale_after]
+        if silent:
+            self._warn_once(("load sharing", 0), "load sharing held: no collective thrust "
+                            "(ATTITUDE_TARGET) from vehicle(s) "
+                            f"{', '.join(map(str, silent))}")
 
     def _rope_lead(self, fleet: FleetState, demand: MotionDemand,
                    accel: np.ndarray) -> np.ndarray:
