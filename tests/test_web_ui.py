@@ -241,7 +241,11 @@ def test_every_viewer_gets_a_beat_with_the_loops_ticks() -> None:
                 times = [t for _, t, _ in after]
                 assert len(after) >= 6 and None not in times, after  # 4 Hz: about 8
                 assert times == sorted(times) and times[-1] - times[0] > 1.0, times
-                assert max(age for _, _, age in after) < 0.3, after  # each soon after its tick
+                # each soon after its tick: within the loop's own longest tick gap of the
+                # moment (a busy machine delays the tick, not the beat)
+                ages = [age for _, _, age in after]
+                gap = max(0.25, float(np.diff(times).max()))
+                assert max(ages) < gap + 0.05 and float(np.median(ages)) < 0.1, (gap, after)
             # every buffer of the page wakes its sender on viser's loop (web._viser_threads)
             websock = ui.server._websock_server
             buffers = [websock._broadcast_buffer] + [

@@ -1,0 +1,85 @@
+"""The project's own test suite on a busy machine: the README's pytest command, timed,
+with CPU hogs beside it.
+
+Why: the suite must pass whatever else the machine runs (a developer's laptop, a
+shared CI host); a test that fails under load checks the load, not the code. Each
+run starts ``--hogs`` processes that keep a core busy each, runs the pytest part of
+the README's test command (``.ci/run``'s last line, so the two cannot drift) and
+stops the hogs. Prints a line per run, then one JSON object on the last line:
+
+    {"runs": 3, "hogs": 2, "command": "...", "passed": [true, ...],
+     "wall_s": [...], "failed": [[...], ...]}
+
+Exit status 1 unless every run passed.
+
+    python bench/suite.py [--runs 3] [--hogs 2]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shlex
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from continuity import hogs
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def pytest_command() -> list[str]:
+    """The pytest part of the test command ``.ci/run`` runs (the README's)."""
+    last = (ROOT / ".ci" / "run").read_text().strip().splitlines()[-1]
+    for part in last.split("&&"):
+        argv = shlex.split(part)
+        if "pytest" in argv:
+            return argv
+    raise SystemExit(f"bench/suite.py: no pytest in .ci/run's last line: {last!r}")
+
+
+def run_once(argv: list[str], hog_count: int) -> tuple[bool, float, list[str]]:
+    """One run of the suite beside ``hog_count`` hogs: passed, wall seconds, failures."""
+    busy = hogs(hog_count)
+    try:
+        started = time.monotonic()
+        out = subprocess.run(argv, cwd=ROOT, capture_output=True, text=True, check=False)
+        wall = time.monotonic() - started
+    finally:
+        for p in busy:
+            p.kill()
+            p.wait()
+    failed = [line.split(" - ")[0] for line in out.stdout.splitlines()
+              if line.startswith(("FAILED ", "ERROR "))]
+    tail = out.stdout.strip().splitlines()[-1:] or ["(no output)"]
+    print(f"  {tail[0]}", flush=True)
+    return out.returncode == 0, wall, failed
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--runs", type=int, default=3, help="runs of the whole suite")
+    parser.add_argument("--hogs", type=int, default=2, help="CPU hogs beside each run")
+    args = parser.parse_args()
+    argv = pytest_command()
+    summary: dict[str, object] = {"runs": args.runs, "hogs": args.hogs,
+                                  "command": shlex.join(argv)}
+    passed, walls, failures = [], [], []
+    for k in range(args.runs):
+        print(f"run {k + 1}/{args.runs}: {shlex.join(argv)} beside {args.hogs} hog(s)",
+              flush=True)
+        ok, wall, failed = run_once(argv, args.hogs)
+        passed.append(ok)
+        walls.append(round(wall, 1))
+        failures.append(failed)
+        print(f"run {k + 1}/{args.runs}: {'passed' if ok else 'FAILED'} in {wall:.0f} s"
+              + "".join(f"\n  {f}" for f in failed), flush=True)
+    summary |= {"passed": passed, "wall_s": walls, "failed": failures}
+    print(json.dumps(summary))
+    return 0 if all(passed) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
