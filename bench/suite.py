@@ -10,9 +10,10 @@ stops the hogs. Prints a line per run, then one JSON object on the last line:
     {"runs": 3, "hogs": 2, "command": "...", "passed": [true, ...],
      "wall_s": [...], "failed": [[...], ...]}
 
-Exit status 1 unless every run passed.
+Each run's whole output is kept in ``--keep`` (default: a temporary directory, named
+on the run's line) for the failures' tracebacks. Exit status 1 unless every run passed.
 
-    python bench/suite.py [--runs 3] [--hogs 2]
+    python bench/suite.py [--runs 3] [--hogs 2] [--keep DIR]
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ import json
 import shlex
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -40,8 +42,9 @@ def pytest_command() -> list[str]:
     raise SystemExit(f"bench/suite.py: no pytest in .ci/run's last line: {last!r}")
 
 
-def run_once(argv: list[str], hog_count: int) -> tuple[bool, float, list[str]]:
-    """One run of the suite beside ``hog_count`` hogs: passed, wall seconds, failures."""
+def run_once(argv: list[str], hog_count: int, keep: Path) -> tuple[bool, float, list[str]]:
+    """One run of the suite beside ``hog_count`` hogs, its output written to ``keep``:
+    passed, wall seconds, failures."""
     busy = hogs(hog_count)
     try:
         started = time.monotonic()
@@ -51,10 +54,11 @@ def run_once(argv: list[str], hog_count: int) -> tuple[bool, float, list[str]]:
         for p in busy:
             p.kill()
             p.wait()
+    keep.write_text(out.stdout + out.stderr)
     failed = [line.split(" - ")[0] for line in out.stdout.splitlines()
               if line.startswith(("FAILED ", "ERROR "))]
     tail = out.stdout.strip().splitlines()[-1:] or ["(no output)"]
-    print(f"  {tail[0]}", flush=True)
+    print(f"  {tail[0]} (output: {keep})", flush=True)
     return out.returncode == 0, wall, failed
 
 
@@ -62,7 +66,11 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--runs", type=int, default=3, help="runs of the whole suite")
     parser.add_argument("--hogs", type=int, default=2, help="CPU hogs beside each run")
+    parser.add_argument("--keep", type=Path, default=None,
+                        help="directory for each run's output (default: a new temporary one)")
     args = parser.parse_args()
+    keep = args.keep or Path(tempfile.mkdtemp(prefix="suite-"))
+    keep.mkdir(parents=True, exist_ok=True)
     argv = pytest_command()
     summary: dict[str, object] = {"runs": args.runs, "hogs": args.hogs,
                                   "command": shlex.join(argv)}
@@ -70,7 +78,7 @@ def main() -> int:
     for k in range(args.runs):
         print(f"run {k + 1}/{args.runs}: {shlex.join(argv)} beside {args.hogs} hog(s)",
               flush=True)
-        ok, wall, failed = run_once(argv, args.hogs)
+        ok, wall, failed = run_once(argv, args.hogs, keep / f"run{k + 1}.log")
         passed.append(ok)
         walls.append(round(wall, 1))
         failures.append(failed)
