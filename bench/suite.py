@@ -13,7 +13,7 @@ stops the hogs. Prints a line per run, then one JSON object on the last line:
 Each run's whole output is kept in ``--keep`` (default: a temporary directory, named
 on the run's line) for the failures' tracebacks. Exit status 1 unless every run passed.
 
-    python bench/suite.py [--runs 3] [--hogs 2] [--keep DIR]
+    python bench/suite.py [--runs 3] [--hogs 2] [--workers 2] [--keep DIR]
 """
 
 from __future__ import annotations
@@ -68,10 +68,12 @@ def main() -> int:
     parser.add_argument("--hogs", type=int, default=2, help="CPU hogs beside each run")
     parser.add_argument("--keep", type=Path, default=None,
                         help="directory for each run's output (default: a new temporary one)")
+    parser.add_argument("--workers", type=int, default=0,
+                        help="pytest-xdist workers added to the command (default: as it is)")
     args = parser.parse_args()
     keep = args.keep or Path(tempfile.mkdtemp(prefix="suite-"))
     keep.mkdir(parents=True, exist_ok=True)
-    argv = pytest_command()
+    argv = pytest_command() + (["-n", str(args.workers)] if args.workers > 0 else [])
     summary: dict[str, object] = {"runs": args.runs, "hogs": args.hogs,
                                   "command": shlex.join(argv)}
     passed, walls, failures = [], [], []
