@@ -53,13 +53,18 @@ def free_split(xy: np.ndarray) -> np.ndarray:
     return np.eye(n) - np.linalg.pinv(balance) @ balance
 
 
+def _vertical(thrust: np.ndarray, tilt: np.ndarray) -> np.ndarray:
+    """(n,) each vehicle's vertical thrust, in its thrust's units."""
+    return np.asarray(thrust, dtype=float) * np.cos(tilt)
+
+
 def estimated_shares(thrust: np.ndarray, tilt: np.ndarray, vehicle_mass: float,
                      payload_mass: float) -> np.ndarray:
     """(n,) fraction of the payload's weight on each vehicle, from each one's collective
     thrust (any common scale) and tilt (rad), for vehicles of one airframe in steady
     flight: the vertical thrusts add up to (n m + M) g, of which m g is each vehicle's.
     NaN where the thrusts hold nobody up (none positive in total: on the ground)."""
-    vertical = thrust * np.cos(tilt)
+    vertical = _vertical(thrust, tilt)
     n = len(vertical)
     total = float(vertical.sum())
     if not total > 0.0:
@@ -97,7 +102,7 @@ class LoadSharing:
     def observe_slack(self, dt: float, thrust: np.ndarray, tilt: np.ndarray) -> None:
         """Average each vehicle's vertical thrust over ``dt`` seconds with every rope slack
         (airborne, below the taut-rope altitude): what holds each up alone."""
-        vertical = np.asarray(thrust, dtype=float) * np.cos(tilt)
+        vertical = _vertical(thrust, tilt)
         if not (np.all(np.isfinite(vertical)) and np.all(vertical > 0.0)
                 and math.isfinite(dt) and dt > 0.0):
             return
@@ -113,7 +118,7 @@ class LoadSharing:
         if self.slack is None:
             return estimated_shares(thrust, tilt, *self._masses) - self._target
         vehicle_mass, payload_mass = self._masses
-        pull = np.asarray(thrust, dtype=float) * np.cos(tilt) - self.slack
+        pull = _vertical(thrust, tilt) - self.slack
         weight = float(self.slack.mean()) * payload_mass / vehicle_mass  # in thrust units
         return (pull - self._target * float(pull.sum())) / weight
 

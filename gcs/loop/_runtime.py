@@ -654,7 +654,7 @@ class Runtime:
             if fresh and phase in _SLACK_HOVER:
                 sharing.observe_slack(dt, fleet.thrust, fleet.tilt)
             return
-        if phase not in _CARRYING or altitude < bottom:
+        if phase not in _CARRYING:
             return
         if fresh:
             sharing.update(dt, fleet.thrust, fleet.tilt)
