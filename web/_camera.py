@@ -135,13 +135,19 @@ class ViewControls:
         # took for the viewer's hand (look_at, position): its report counts once
         client.camera.on_update(self._on_report)
 
-    def _on_report(self, camera: viser.CameraHandle) -> None:
-        """The browser said where its camera is (viser's thread pool): a view this one set,
-        or the viewer's own hand on the camera."""
-        look_at = np.array(camera.look_at, dtype=float)
-        with self._lock:
+    async def _on_report(self, camera: viser.CameraHandle) -> None:
+        """The browser said where its camera is: a view this one set, or the viewer's own
+        hand on the camera.
+
+        A coroutine, so viser runs it on its loop right after it stored the report: a
+        plain function ran on its thread pool, late on a loaded machine, and judged
+        whatever camera was there by then (a later report, or a move half written), so a
+        shown framing went unseen and the viewer's own view was framed over.
+        """
+        with self._lock:  # never between a move's position and its point looked at
+            look_at, position = _pose(camera)
             hand = self._hand
-        if hand is not None and _same(look_at, hand[0]) and _same(camera.position, hand[1]):
+        if hand is not None and _same(look_at, hand[0]) and _same(position, hand[1]):
             return  # the frame loop already took this view for the viewer's hand
         if not self._was_set(look_at):
             if not _page_view(look_at):  # the page's own view is no hand of the viewer
@@ -149,7 +155,7 @@ class ViewControls:
             return
         with self._lock:
             placed = list(self._set_at)
-        if not any(_same(camera.position, p) for p in placed):
+        if not any(_same(position, p) for p in placed):
             self._viewer_at = self.clock()  # orbiting or zooming about our point
         self._shown = True
 
@@ -170,7 +176,7 @@ class ViewControls:
         with self._lock:
             asked, self._centre_asked = self._centre_asked, False
         camera = self.client.camera
-        look_at = np.array(camera.look_at, dtype=float)
+        look_at, position = _pose(camera)
         # the browser does not show the framing: not yet, or it put its own first view
         # back over it (never a pan: framed again whatever it showed before)
         was_set = self._was_set(look_at)
@@ -181,7 +187,7 @@ class ViewControls:
             # again until the browser shows it: one that was still loading put its first
             # camera back over the framing, and reported that.
             if asked or reframe:
-                self._side = camera.position - camera.look_at
+                self._side = position - look_at
             direction = self._side
             self._framed, self._shown = True, False
             self._framed_at = self.clock()
@@ -197,7 +203,7 @@ class ViewControls:
             # _on_report for it (a loaded machine): the hand is on the camera from now
             self._viewer_at = max(self._viewer_at, self.clock())
             with self._lock:
-                self._hand = (look_at, np.array(camera.position, dtype=float))
+                self._hand = (look_at, position)
         if self._pan is None or not was_set:
             self._pan = look_at - centroid  # follow from here: the viewer's own view
             self._known(look_at)  # known from now on, as the ones this view set
@@ -206,7 +212,7 @@ class ViewControls:
             return
         if self.clock() - self._viewer_at < HANDS_OFF_S:
             return  # a move now would pull the camera from under the viewer's drag
-        self._move(target + (camera.position - look_at), target)
+        self._move(target + (position - look_at), target)
 
     def _was_set(self, look_at: np.ndarray) -> bool:
         with self._lock:  # the reports come on viser's threads
@@ -224,12 +230,22 @@ class ViewControls:
         then set to where it must end up (a no-op when the shift put it there).
         """
         self._known(look_at)
-        with self._lock:
-            self._set_at.append(np.array(position, dtype=float))
         camera = self.client.camera
-        with self.client.atomic():
-            camera.position = position
-            camera.look_at = look_at
+        with self._lock:  # a report judged now sees the camera before or after, whole
+            self._set_at.append(np.array(position, dtype=float))
+            with self.client.atomic():
+                camera.position = position
+                camera.look_at = look_at
+
+
+def _pose(camera: viser.CameraHandle) -> tuple[np.ndarray, np.ndarray]:
+    """The camera's point looked at and position, of one report: viser replaces its
+    camera state whole on its loop when a report arrives, between any two reads."""
+    while True:
+        look_at = np.array(camera.look_at, dtype=float)
+        position = np.array(camera.position, dtype=float)
+        if np.array_equal(look_at, camera.look_at):
+            return look_at, position
 
 
 def _same(a: np.ndarray, b: np.ndarray) -> bool:
