@@ -14,6 +14,7 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as v20
 
 from gcs.link import Link
+from gcs.link._health import SequenceTracker
 from gcs.transport import FrameDirection, MavutilTransport
 from gcs.wire import FrameDecoder, MavlinkEncoder, MavMessage, Severity, Telemetry
 
@@ -161,6 +162,38 @@ def test_packet_loss_from_sequence_numbers(rig: Rig) -> None:
     health = rig.link.health
     assert health.packets_lost == 100
     assert health.loss_ratio == pytest.approx(100 / 300)
+
+
+def test_reordered_frames_are_not_counted_lost(rig: Rig) -> None:
+    """A radio (or a sender's two threads) swapping two frames lost nothing: the late one
+    read as a wrap of the 8-bit number was 255 frames lost, a link that lost none."""
+    frames = [heartbeat(rig) for _ in range(300)]  # the number wraps past 255
+    swapped = list(frames)
+    for i in (10, 100, 254):
+        swapped[i], swapped[i + 1] = swapped[i + 1], swapped[i]
+    for start in range(0, len(swapped), 50):  # within a socket's buffer (heartbeats, 1 kB
+        rig.send(*swapped[start:start + 50])  # each in the kernel's count)
+        sent = min(start + 50, len(frames))
+        rig.until(lambda n=sent: rig.link.health.frames_received == n, f"{sent} frames")
+    assert rig.link.health.packets_lost == 0
+
+
+@pytest.mark.parametrize(("seqs", "lost"), [
+    ([1, 2, 4, 5], 1),                 # one missing
+    ([1, 2, 4, 3, 5], 0),              # late, counted back
+    ([250, 252, 255, 0, 251, 1], 2),   # gaps up to the wrap; one of them late
+    ([1, 2, 2, 3], 0),                 # a duplicate
+    ([3, 3, 1, 1], 0),                 # a duplicate of a late frame never missed
+    ([200, 201, 150, 151, 202, 205], 2),  # the sender started again: no loss read into it
+    ([5, 9, 7, 7, 6], 1),              # a late frame counted back once, not twice
+])
+def test_sequence_tracker_counts_what_never_came(seqs: list[int], lost: int) -> None:
+    tracker = SequenceTracker()
+    for seq in seqs:
+        tracker.update(1, 1, seq)
+    tracker.update(2, 1, 0)  # another stream's numbers are its own
+    tracker.update(2, 1, 10)
+    assert tracker.lost == lost + 9
 
 
 def test_heartbeat_age_and_alive(rig: Rig) -> None:

@@ -62,17 +62,43 @@ class LinkHealth:
 
 
 class SequenceTracker:
-    """Counts frames missing from per-stream sequence numbers; not thread-safe."""
+    """Counts frames missing from per-stream sequence numbers; not thread-safe.
+
+    A frame that arrives late (a UDP radio or a sender's threads reorder them) was counted
+    lost when the frames after it arrived: it is counted back, and the stream goes on from
+    the newest. A step back to a number never missed (a duplicate, a sender that started
+    again) counts nothing. Without this, one reordered
+    pair read as 255 frames lost (the step back taken as a wrap of the 8-bit number).
+    """
 
     def __init__(self) -> None:
         self._last: dict[tuple[int, int], int] = {}
+        self._missing: dict[tuple[int, int], set[int]] = {}
         self.lost = 0
-        """Frames inferred lost so far."""
+        """Frames inferred lost so far (late arrivals counted back)."""
 
     def update(self, sysid: int, compid: int, seq: int) -> None:
         """Account one received frame."""
         key = (sysid, compid)
         last = self._last.get(key)
+        missing = self._missing.setdefault(key, set())
+        if last is None:
+            self._last[key] = seq
+            return
+        step = (seq - last) & 0xFF
+        if step == 0:
+            return  # a duplicate, not a loss
+        if step >= _WINDOW:  # behind the newest
+            if seq in missing:
+                missing.discard(seq)
+                self.lost -= 1
+            return  # else a duplicate of a late one, or a sender started again (it is
+            # ahead again within 128 frames; a reboot is never counted as a loss)
+        self.lost += step - 1
+        missing.update((last + k) & 0xFF for k in range(1, step))
+        missing.difference_update([m for m in missing if (seq - m) & 0xFF >= _WINDOW])
         self._last[key] = seq
-        if last is not None and seq != last:  # an equal number is a duplicate, not a loss
-            self.lost += (seq - last - 1) & 0xFF
+
+
+_WINDOW = 128
+"""A sequence number this far or further ahead of the newest (mod 256) is behind it."""
