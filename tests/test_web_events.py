@@ -111,6 +111,9 @@ def test_link_quality_is_the_share_received_over_the_last_seconds() -> None:
     assert quality.update(1.0, health(1090, 10)) == {1: 90.0}  # this second: 90 of 100
     assert quality.update(7.0, health(1690, 10)) == {1: 100.0}  # the loss left the window
     assert quality.update(8.0, health(1690, 10, alive=False)) == {1: 0.0}
+    # a frame counted lost before the window arrived late in it: counted back, never
+    # more than all received
+    assert quality.update(13.0, health(1790, 9)) == {1: 100.0}
 
 
 def test_every_mode_entry_is_compiled_before_the_first_command() -> None:

@@ -19,7 +19,9 @@ __all__ = ["LinkQuality", "received_share"]
 
 
 def received_share(received: int, lost: int) -> float:
-    """Frames received of those sent, % (NaN: none either way)."""
+    """Frames received of those sent, % (NaN: none either way). ``lost`` below 0 (late
+    frames counted back, lost before the window) counts as none lost."""
+    lost = max(lost, 0)
     total = received + lost
     return 100.0 * received / total if total > 0 else math.nan
 
