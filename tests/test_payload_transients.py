@@ -23,7 +23,7 @@ import pytest
 
 from gcs.analysis import analyze
 from gcs.config import Team, load_team
-from gcs.guidance import Guidance, MotionDemand, rope_pull_ned, rope_turn_lead
+from gcs.guidance import Guidance, MotionDemand, rope_growth_lead, rope_pull_ned, rope_turn_lead
 from gcs.testing import SimTeam
 from tests.conftest import SQUARE
 
@@ -87,6 +87,18 @@ def test_lifting_at_the_full_lift_rate_pulls_the_shape_beyond_it(square: Team) -
     fast = _with(square, "flight", pickup_rate=square.config.flight.lift_rate)
     errors = _lift_and_set_down(fast)
     assert errors["lifting"] > analyze(square).safe_deformation, errors
+
+
+def test_the_lead_cancels_a_lag_behind_a_growing_pull() -> None:
+    """While the ropes take the payload, each pull grows as ``f F``: an acceleration loop
+    ``lag`` late gives ``lag df/dt F / m`` more than commanded (inward); the lead is minus
+    that, outward; nothing while the share carried holds still."""
+    pull = np.array([[-0.9, 0.0], [0.28, 0.86]])  # N, NED: the rope pulls toward the payload
+    rate, lag, mass = 0.5, 0.15, 0.5
+    late = (rate * 2.0 - rate * (2.0 - lag)) * pull / mass  # f(t) F - f(t - lag) F, over m
+    assert np.allclose(rope_growth_lead(pull, rate, lag, mass), -late)
+    assert rope_growth_lead(pull, rate, lag, mass)[0, 0] > 0.0  # pulled south: led north
+    assert not rope_growth_lead(pull, 0.0, lag, mass).any()
 
 
 def test_the_lead_cancels_a_lag_behind_a_turning_pull() -> None:

@@ -110,8 +110,10 @@ class GuidanceConfig:
         doc="predict relative positions half a period ahead (see gcs.guidance)", default=True)
     rope_lag: float = field(
         doc="the vehicles' autopilots' lag in following an external force, s: while the "
-            "team spins, each setpoint leads the rope's turning pull by it "
-            "(gcs/guidance/_rope_lead.py); 0 turns the lead off", default=0.0, ge=0.0, le=2.0)
+            "team spins, each setpoint leads the rope's turning pull by it, and while the "
+            "ropes take the payload (lifting, with load sharing) its growing pull "
+            "(gcs/guidance/_rope_lead.py); 0 turns the leads off", default=0.0, ge=0.0,
+        le=2.0)
     setpoint_lag: float = field(
         doc="the autopilots' lag in following an acceleration setpoint, s: the guidance "
             "predicts the relative positions this much further ahead (about 0.25 for "

@@ -1,4 +1,5 @@
-"""The rope's pull turning with a spinning team, led by the autopilot's lag.
+"""The rope's pull turning with a spinning team, or growing as the ropes take the payload,
+led by the autopilot's lag.
 
 Why: each carrying vehicle's autopilot cancels the rope's horizontal pull
 ``F`` through its acceleration loop, which follows an external force with a
@@ -11,6 +12,14 @@ feed-forward, sized for the commanded rate, pulled the shape in (0.17 m).
 The autopilot's estimate of the pull is ``F(t - tau)``, so the vehicle gets
 ``(F(t) - F(t - tau)) / m = tau dF/dt / m`` more than commanded; commanding
 ``-tau omega z x F / m`` more cancels it.
+
+The same lag acts while the ropes take the payload's weight in the pickup (or give
+it up in the set-down): each rope's pull grows as ``f F`` with ``f`` the share of the
+weight the ropes carry, and the vehicle is left ``tau df/dt F / m`` short, inward.
+On the pentagon in ``tests/data`` that drag, uneven (the vehicles the shape holds
+least went furthest), let one rope take 0.34 of the payload at lift-off against a
+design 0.25; led by ``-tau df/dt F / m`` (:func:`rope_growth_lead`) the ropes took it
+within 0.18-0.23 each.
 """
 
 from __future__ import annotations
@@ -19,7 +28,7 @@ import math
 
 import numpy as np
 
-__all__ = ["rope_pull_ned", "rope_turn_lead"]
+__all__ = ["rope_growth_lead", "rope_pull_ned", "rope_turn_lead"]
 
 
 def rope_pull_ned(pull_body: np.ndarray, heading: float) -> np.ndarray:
@@ -38,3 +47,13 @@ def rope_turn_lead(pull_ned: np.ndarray, omega: float, lag: float,
     motion, as the lag brakes it."""
     k = -lag * omega / mass
     return np.stack([-k * pull_ned[:, 1], k * pull_ned[:, 0]], axis=1)
+
+
+def rope_growth_lead(pull_ned: np.ndarray, rate: float, lag: float,
+                     mass: float) -> np.ndarray:
+    """(n, 2) acceleration, m/s^2, that cancels an autopilot's lag ``lag`` (s) behind
+    the horizontal rope pulls growing as ``f pull_ned`` (n, 2, N: the pulls with the
+    whole payload hanging), ``f`` the share of the payload's weight the ropes carry,
+    rising at ``rate`` (1/s; falling below 0) on vehicles of ``mass`` kg: against each
+    pull."""
+    return (-lag * rate / mass) * pull_ned

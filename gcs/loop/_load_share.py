@@ -9,8 +9,8 @@ differ by centimetres, enough to leave a diagonal slack). The analysis certifies
 vehicle for its design share only if something keeps the split there.
 
 The GCS reads each vehicle's collective thrust (``ATTITUDE_TARGET``, which PX4 and
-ArduCopter send). Each vehicle's thrust with its rope slack (hovering below the
-taut-rope altitude: :meth:`LoadSharing.observe_slack`) is what holds it up alone; above
+ArduCopter send). Each vehicle's thrust with its rope slack (hovering below the lower
+half of the pickup band: :meth:`LoadSharing.observe_slack`) is what holds it up alone; above
 that, the rest is its rope's pull, in the vehicle's own thrust units, so the split is
 known while the payload is still being picked up, and a vehicle a little heavier than
 the others (another battery) is not taken for one carrying more. Without that hover
@@ -26,6 +26,10 @@ vehicle the shape holds furthest out) is let down before it takes the payload al
 a pentagon acting only once the payload hung left one rope at 0.40 of the payload at
 lift-off against a design 0.25. (An integral trim oscillated: the split answers a trim
 only as the guidance moves the shape, over tens of seconds.)
+
+The same thrusts say how fast the ropes take the payload (:attr:`LoadSharing.carried_rate`):
+the pickup's rope lead (gcs/guidance/_rope_lead.py) leads each vehicle's growing pull by
+it, the drag that left the pentagon's stiffest vehicle taut first.
 """
 
 from __future__ import annotations
@@ -34,13 +38,18 @@ import math
 
 import numpy as np
 
-__all__ = ["FILTER_S", "SLACK_S", "LoadSharing", "estimated_shares", "free_split"]
+__all__ = ["CARRIED_RATE_S", "FILTER_S", "SLACK_S", "LoadSharing", "estimated_shares",
+           "free_split"]
 
 FILTER_S = 1.0
 """Time constant of the trims' approach to their target, s."""
 
 SLACK_S = 2.0
 """Time constant of the average of each vehicle's thrust with its rope slack, s."""
+
+CARRIED_RATE_S = 0.5
+"""Time constant of the average of the rate at which the ropes take the payload, s (the
+thrusts' noise apart, the pickup's rise kept: it takes about two seconds)."""
 
 
 def free_split(xy: np.ndarray) -> np.ndarray:
@@ -98,6 +107,10 @@ class LoadSharing:
         self.slack: np.ndarray | None = None
         """(n,) each vehicle's vertical thrust with its rope slack (its units), or None
         before any such hover."""
+        self.carried_rate = 0.0
+        """How fast the share of the payload's weight on the ropes grows, 1/s (falling:
+        below 0; 0 when not known): what the pickup's rope lead leads."""
+        self._carried: tuple[float, float] | None = None  # (t, share) at the last look
 
     def observe_slack(self, dt: float, thrust: np.ndarray, tilt: np.ndarray) -> None:
         """Average each vehicle's vertical thrust over ``dt`` seconds with every rope slack
@@ -117,10 +130,40 @@ class LoadSharing:
         each one's slack-rope thrust, or without it from the thrusts' ratios."""
         if self.slack is None:
             return estimated_shares(thrust, tilt, *self._masses) - self._target
-        vehicle_mass, payload_mass = self._masses
-        pull = _vertical(thrust, tilt) - self.slack
-        weight = float(self.slack.mean()) * payload_mass / vehicle_mass  # in thrust units
+        pull, weight = self._pulls(thrust, tilt, self.slack)
         return (pull - self._target * float(pull.sum())) / weight
+
+    def carried(self, thrust: np.ndarray, tilt: np.ndarray) -> float:
+        """The share of the payload's weight the ropes carry (NaN before the slack-rope
+        thrusts are known): the thrusts above them, over the payload's weight."""
+        if self.slack is None:
+            return math.nan
+        pull, weight = self._pulls(thrust, tilt, self.slack)
+        return float(pull.sum()) / weight
+
+    def _pulls(self, thrust: np.ndarray, tilt: np.ndarray,
+               slack: np.ndarray) -> tuple[np.ndarray, float]:
+        """(n,) each rope's vertical pull, and the payload's weight, in thrust units."""
+        vehicle_mass, payload_mass = self._masses
+        return (_vertical(thrust, tilt) - slack,
+                float(slack.mean()) * payload_mass / vehicle_mass)
+
+    def observe_carried(self, t: float, thrust: np.ndarray | None,
+                        tilt: np.ndarray) -> float:
+        """Follow :attr:`carried_rate` to time ``t`` (s) with the latest thrusts (None:
+        not fresh: the rate is forgotten); the rate."""
+        share = self.carried(thrust, tilt) if thrust is not None else math.nan
+        if not math.isfinite(share):
+            self._carried, self.carried_rate = None, 0.0
+            return 0.0
+        last = self._carried
+        if last is not None and t > last[0]:
+            dt = t - last[0]
+            step = min(1.0, dt / CARRIED_RATE_S)
+            self.carried_rate += step * ((share - last[1]) / dt - self.carried_rate)
+        if last is None or t > last[0]:
+            self._carried = (t, share)
+        return self.carried_rate
 
     def update(self, dt: float, thrust: np.ndarray, tilt: np.ndarray) -> np.ndarray:
         """Move the trims ``dt`` seconds on the latest thrusts and tilts (finite, every
@@ -145,3 +188,4 @@ class LoadSharing:
         """Every trim back to zero and the slack thrusts forgotten (a new flight)."""
         self.trims = np.zeros_like(self.trims)
         self.slack = None
+        self._carried, self.carried_rate = None, 0.0

@@ -49,6 +49,7 @@ from gcs.guidance import (
     Guidance,
     MotionDemand,
     finite_max_norm,
+    rope_growth_lead,
     rope_pull_ned,
     rope_turn_lead,
     saturate,
@@ -622,8 +623,7 @@ class Runtime:
         elif fleet.located:
             accel = self.guidance.accelerations(fleet.p_ned[:, :2], fleet.v_ned[:, :2],
                                                 fleet.yaw, demand)
-            if carrying:
-                accel = self._rope_lead(fleet, demand, accel)
+            accel = self._rope_lead(fleet, demand, accel, carrying=carrying)
             largest = finite_max_norm(accel)  # what the guidance could not compute becomes 0
         else:  # cannot place every vehicle: hold still horizontally
             accel, largest = np.zeros((fleet.n, 2)), 0.0
@@ -632,9 +632,9 @@ class Runtime:
 
     def _share_load(self, now: float, fleet: FleetState, phase: Phase, scale: float) -> None:
         """Move the load-sharing trims on this tick's thrusts, while every vehicle's thrust
-        is fresh: each one's slack-rope thrust learnt below the pickup band, the trims moved
-        from its bottom up (where the ropes start to take the payload); back to zero on the
-        ground."""
+        is fresh: each one's slack-rope thrust learnt below the band's lower half, the trims
+        moved from its bottom up (where the ropes start to take the payload), the rate the
+        ropes take it at followed while lifting; back to zero on the ground."""
         sharing = self.load_sharing
         if sharing is None:
             return
@@ -644,15 +644,23 @@ class Runtime:
             return
         dt, self._shared_at = min(now - self._shared_at, _SHARE_DT_MAX), now
         if fleet.thrust is None or fleet.thrust_age is None:
+            sharing.observe_carried(now, None, fleet.tilt)
             return
         cfg = self.team.config
         fresh = bool(np.all(fleet.thrust_age <= cfg.safety.stale_after)
                      and np.all(np.isfinite(fleet.thrust)) and np.all(np.isfinite(fleet.tilt)))
+        # the rate the ropes take the payload at, for the pickup's rope lead (not the
+        # set-down's: the payload touching down is a step the lead came late for, and
+        # pulled the square 0.07 m further in)
+        sharing.observe_carried(now, fleet.thrust if fresh and phase is Phase.LIFTING
+                                else None, fleet.tilt)
         altitude = float(np.mean(-fleet.p_ned[:, 2]))
-        bottom = self.taut_altitude(scale) - cfg.flight.pickup_band[0]
-        if altitude < bottom:  # every rope slack
-            if fresh and phase in _SLACK_HOVER:
-                sharing.observe_slack(dt, fleet.thrust, fleet.tilt)
+        taut, below = self.taut_altitude(scale), cfg.flight.pickup_band[0]
+        # every rope slack up to half the band below the taut-rope altitude: a take-off
+        # that overshot into the band's lower half still leaves time to learn the slack
+        if altitude < taut - below / 2 and fresh and phase in _SLACK_HOVER:
+            sharing.observe_slack(dt, fleet.thrust, fleet.tilt)
+        if altitude < taut - below:
             return
         if phase not in _CARRYING:
             return
@@ -666,13 +674,17 @@ class Runtime:
                             "(ATTITUDE_TARGET) from vehicle(s) "
                             f"{', '.join(map(str, silent))}")
 
-    def _rope_lead(self, fleet: FleetState, demand: MotionDemand,
-                   accel: np.ndarray) -> np.ndarray:
-        """``accel`` plus the lead of the rope's pull turning with a spinning team
-        (gcs/guidance/_rope_lead.py), saturated again; unchanged when not spinning."""
+    def _rope_lead(self, fleet: FleetState, demand: MotionDemand, accel: np.ndarray, *,
+                   carrying: bool) -> np.ndarray:
+        """``accel`` plus the leads of the ropes' pulls (gcs/guidance/_rope_lead.py):
+        turning with a spinning team (``carrying``: the payload hangs), and growing or
+        shrinking as the ropes take or give up the payload (load sharing's rate);
+        saturated again; unchanged when neither."""
         lag = self.team.config.guidance.rope_lag
-        omega = self.guidance.angular_rate(demand)
-        if lag <= 0.0 or omega == 0.0:
+        omega = self.guidance.angular_rate(demand) if carrying else 0.0
+        sharing = self.load_sharing
+        rate = sharing.carried_rate if sharing is not None else 0.0
+        if lag <= 0.0 or (omega == 0.0 and rate == 0.0):
             return accel
         scale = demand.scale
         if self._rope_pull is None or self._rope_pull[0] != scale:
@@ -684,8 +696,11 @@ class Runtime:
         heading = fit_rotation(scale * self.team.formation.positions, fleet.p_ned[:, :2])
         if heading is None:
             return accel
-        lead = rope_turn_lead(rope_pull_ned(self._rope_pull[1], heading), omega, lag,
-                              self.team.config.airframe.mass)
+        pull_ned = rope_pull_ned(self._rope_pull[1], heading)
+        mass = self.team.config.airframe.mass
+        lead = rope_growth_lead(pull_ned, rate, lag, mass)
+        if omega != 0.0:
+            lead += rope_turn_lead(pull_ned, omega, lag, mass)
         lim = self.team.config.limits
         return saturate(accel + lead, norm_max=lim.accel_norm, axis_max=lim.accel_axis)
 
