@@ -488,6 +488,8 @@ def test_a_viewer_that_stops_receiving_says_stale_and_reconnects(browser, pilot,
         wait_for(lambda: is_fresh(page), 15, "the badge fresh", lambda: str(freshness(page)))
         ok = freshness(page)
         gcs_time = float(ok["time"])
+        before = ok["reconnects"]  # a page that loaded slowly (two test workers, a loaded
+        # machine) may have reconnected once already: what the relay does counts from here
         assert ok["background"] != "rgb(201, 42, 42)", ok
 
         # the relay stops: STALE, in red, about a second after the last beat, which came
@@ -511,11 +513,12 @@ def test_a_viewer_that_stops_receiving_says_stale_and_reconnects(browser, pilot,
         back = float(freshness(page)["freshAt"]) / 1e3 - resumed
         print(f"fresh {back:.2f} s after the relay resumed")
         assert float(freshness(page)["time"]) > gcs_time
-        assert freshness(page)["reconnects"] == "0" and not sockets, (freshness(page), sockets)
+        assert freshness(page)["reconnects"] == before and not sockets, (
+            freshness(page), sockets)
 
         # stopped for good: after RECONNECT_AFTER_S the page reconnects, over a new socket
         stopped = relay.stop()
-        wait_for(lambda: freshness(page)["reconnects"] != "0", RECONNECT_AFTER_S + 3,
+        wait_for(lambda: freshness(page)["reconnects"] != before, RECONNECT_AFTER_S + 3,
                  "a forced reconnect", lambda: str(freshness(page)))
         wait_for(lambda: is_fresh(page), 20, "fresh after the reconnect",
                  lambda: f"{freshness(page)}; sockets {sockets}")
