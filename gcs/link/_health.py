@@ -67,8 +67,8 @@ class SequenceTracker:
     A frame that arrives late (a UDP radio or a sender's threads reorder them) was counted
     lost when the frames after it arrived: it is counted back, and the stream goes on from
     the newest. A step back to a number never missed (a duplicate, a sender that started
-    again) counts nothing. Without this, one reordered
-    pair read as 255 frames lost (the step back taken as a wrap of the 8-bit number).
+    again) counts nothing. Without this, one reordered pair read as 255 frames lost (the
+    step back taken as a wrap of the 8-bit number).
     """
 
     def __init__(self) -> None:
@@ -81,23 +81,26 @@ class SequenceTracker:
         """Account one received frame."""
         key = (sysid, compid)
         last = self._last.get(key)
-        missing = self._missing.setdefault(key, set())
         if last is None:
             self._last[key] = seq
+            self._missing[key] = set()
             return
         step = (seq - last) & 0xFF
         if step == 0:
             return  # a duplicate, not a loss
+        missing = self._missing[key]
         if step >= _WINDOW:  # behind the newest
             if seq in missing:
                 missing.discard(seq)
                 self.lost -= 1
             return  # else a duplicate of a late one, or a sender started again (it is
             # ahead again within 128 frames; a reboot is never counted as a loss)
+        self._last[key] = seq
+        if step == 1 and not missing:
+            return  # in order, nothing outstanding: the every-frame case
         self.lost += step - 1
         missing.update((last + k) & 0xFF for k in range(1, step))
         missing.difference_update([m for m in missing if (seq - m) & 0xFF >= _WINDOW])
-        self._last[key] = seq
 
 
 _WINDOW = 128
