@@ -42,6 +42,14 @@ def pytest_command() -> list[str]:
     raise SystemExit(f"bench/suite.py: no pytest in .ci/run's last line: {last!r}")
 
 
+def with_workers(argv: list[str], workers: int) -> list[str]:
+    """``argv`` with its ``-n N`` replaced by ``workers`` (none for 1; as it is for 0)."""
+    if workers <= 0:
+        return argv
+    kept = [a for i, a in enumerate(argv) if a != "-n" and (i == 0 or argv[i - 1] != "-n")]
+    return kept + (["-n", str(workers)] if workers > 1 else [])
+
+
 def run_once(argv: list[str], hog_count: int, keep: Path) -> tuple[bool, float, list[str]]:
     """One run of the suite beside ``hog_count`` hogs, its output written to ``keep``:
     passed, wall seconds, failures."""
@@ -69,11 +77,12 @@ def main() -> int:
     parser.add_argument("--keep", type=Path, default=None,
                         help="directory for each run's output (default: a new temporary one)")
     parser.add_argument("--workers", type=int, default=0,
-                        help="pytest-xdist workers added to the command (default: as it is)")
+                        help="pytest-xdist workers instead of the command's (default: as it is;"
+                             " 1: one process)")
     args = parser.parse_args()
     keep = args.keep or Path(tempfile.mkdtemp(prefix="suite-"))
     keep.mkdir(parents=True, exist_ok=True)
-    argv = pytest_command() + (["-n", str(args.workers)] if args.workers > 0 else [])
+    argv = with_workers(pytest_command(), args.workers)
     summary: dict[str, object] = {"runs": args.runs, "hogs": args.hogs,
                                   "command": shlex.join(argv)}
     passed, walls, failures = [], [], []
