@@ -7,6 +7,8 @@ config, a missing file) print one line and exit with status 2, never a trace.
 from __future__ import annotations
 
 import argparse
+import faulthandler
+import signal
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -532,6 +534,8 @@ def _add_certs_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``gcs`` console script."""
+    if hasattr(signal, "SIGUSR1"):  # `kill -USR1 PID`: a stuck gcs says where, on stderr
+        faulthandler.register(signal.SIGUSR1, all_threads=True)
     parser = build_parser()
     args, rest = parser.parse_known_args(argv)
     if args.command == "sim":

@@ -107,10 +107,16 @@ class PageViewer(WireViewer):
             time.sleep(0.02)
         return True
 
-    def settled_texts(self, quiet: float = 0.5, timeout: float = 30.0) -> set[str]:
-        """:meth:`texts` once nothing new arrived for ``quiet`` seconds; fails if the page
-        still changes after ``timeout`` seconds (a page that never rests would hang the test)."""
+    def settled_texts(self, quiet: float = 0.5, timeout: float = 30.0,
+                      having: frozenset[str] = frozenset()) -> set[str]:
+        """:meth:`texts` once it holds ``having`` and nothing new arrived for ``quiet``
+        seconds; fails if the page still changes after ``timeout`` seconds (a page that never
+        rests would hang the test). ``having``: what the page is known to send, so that a
+        page built late on a busy machine is not taken as settled before it began."""
         deadline = time.monotonic() + timeout
+        if not self.until(lambda: having <= self.texts(), timeout):
+            pytest.fail(f"the page did not send {sorted(having - self.texts())} "
+                        f"in {timeout:.0f} s")
         last: set[str] | None = None
         while (now := self.texts()) != last:
             if time.monotonic() > deadline:
@@ -159,6 +165,20 @@ class OutputLines:
         return out
 
 
+def wait_or_tell(proc: subprocess.Popen[str], seconds: float, err: IO[str]) -> int:
+    """``proc``'s exit status within ``seconds``; else a failure that shows where each of
+    its threads stood (``gcs`` dumps them on SIGUSR1) and its stderr."""
+    try:
+        return proc.wait(timeout=seconds)
+    except subprocess.TimeoutExpired:
+        proc.send_signal(signal.SIGUSR1)
+        time.sleep(2.0)
+        proc.kill()
+        proc.wait()
+        err.seek(0)
+        pytest.fail(f"gcs did not stop within {seconds:g} s of Ctrl-C; its stderr:\n{err.read()}")
+
+
 @contextmanager
 def served(path: Path) -> Iterator[tuple[int, list[str]]]:
     """``gcs replay PATH`` in its own process: its port, and its stdout lines from its
@@ -183,7 +203,7 @@ def served(path: Path) -> Iterator[tuple[int, list[str]]]:
             del lines[:-1]  # viser's banner
             yield port, lines
             proc.send_signal(signal.SIGINT)
-            assert proc.wait(timeout=20) == 0
+            assert wait_or_tell(proc, 20, err) == 0
             lines += [line for line in out.rest(time.monotonic() + 10, "gcs replay's output")
                       if not line.startswith("(viser)")]
         finally:
@@ -375,14 +395,14 @@ def test_replay_command_serves_the_page_without_controls(flight: Path,
             client, cast(OperatorActions, object()), ControlLock(),
             on_control_change=lambda: None))
         with viewer_of(live.get_port()) as viewer:
-            controls = viewer.settled_texts()
+            controls = viewer.settled_texts(having=frozenset({"Take control"}))
     finally:
         live.stop()
     assert {"ABORT: hold, then land", "Take control", "guidance on"} <= controls
     assert any("data-gcs-pad" in text for text in controls)  # the sticks
 
     with served(flight) as (port, lines), viewer_of(port) as viewer:
-        page = viewer.settled_texts()
+        page = viewer.settled_texts(having=frozenset(TIMELINE))
     assert page >= TIMELINE
     view = {"View", "camera follows team", "Centre on team"}  # the camera's: in both pages
     assert view <= page and not (page & controls) - view, page & controls

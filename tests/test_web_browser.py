@@ -862,7 +862,13 @@ def test_the_abort_stays_in_view_and_any_viewer_aborts(pilot, viewer, demo: Demo
 
 def test_ctrl_c_stops_the_demo_and_its_simulator(demo: Demo) -> None:
     demo.proc.send_signal(signal.SIGINT)
-    assert demo.proc.wait(30) == 0, "".join(demo.err[-10:])
+    try:
+        status = demo.proc.wait(30)
+    except subprocess.TimeoutExpired:
+        demo.proc.send_signal(signal.SIGUSR1)  # gcs dumps where each thread stood
+        time.sleep(2.0)
+        pytest.fail("gcs demo did not stop within 30 s of Ctrl-C:\n" + "".join(demo.err[-80:]))
+    assert status == 0, "".join(demo.err[-10:])
     host, port = demo.endpoint.removeprefix("tcp/").rsplit(":", 1)
     with pytest.raises(OSError), socket.create_connection((host, int(port)), timeout=2):
         pass  # nothing listens on the simulator's endpoint any more
