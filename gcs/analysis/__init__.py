@@ -14,16 +14,24 @@ Modules:
     ``_static_load``  The payload hanging at rest from its ropes: where it hangs, which
                       ropes pull, how hard.
     ``_team_load``    The payload's load on each vehicle of a team: at its desired shape, at
-                      the worst shape within a deformation, and the rope lengths that make
-                      every rope taut.
+                      the worst shape within a deformation, accelerating with the team, and
+                      the rope lengths that make every rope taut.
     ``_worst_case``   Force and worst-case analysis of a team (paper, section "Force and
                       worst case").
 """
 
 from gcs.analysis._safe_guidance import safe_guidance
-from gcs.analysis._static_load import NoHangingPointError, StaticLoad, hanging_point, static_load
+from gcs.analysis._static_load import (
+    NoHangingPointError,
+    StaticLoad,
+    accelerating_load,
+    hanging_point,
+    static_load,
+)
 from gcs.analysis._team_load import (
+    AcceleratingShare,
     WorstLoad,
+    accelerating_share,
     desired_load,
     even_rope_lengths,
     hang_depth,
@@ -40,12 +48,15 @@ from gcs.analysis._worst_case import (
 )
 
 __all__ = [
+    "AcceleratingShare",
     "Analysis",
     "NoHangingPointError",
     "StaticLoad",
     "StaticShares",
     "WorstLoad",
     "a_safe_span",
+    "accelerating_load",
+    "accelerating_share",
     "analysis_json",
     "analyze",
     "desired_load",

@@ -28,6 +28,9 @@ centres of mass, NED) on ropes of given lengths.
   anchor; a millimetre of difference in height moves the split of such a team (see
   :func:`worst_share`).
 
+A payload that accelerates with the team (:func:`accelerating_load`) is the same
+problem in the team's frame, under the effective gravity ``g - a``.
+
 A vehicle's load is its rope's pull on it: ``T_i u_i``, its vertical part the
 weight it carries, its horizontal part eq. Th's pull.
 """
@@ -40,8 +43,8 @@ from itertools import combinations
 
 import numpy as np
 
-__all__ = ["TAUT_TOLERANCE", "NoHangingPointError", "StaticLoad", "hanging_point", "rope_tensions",
-           "static_load"]
+__all__ = ["TAUT_TOLERANCE", "NoHangingPointError", "StaticLoad", "accelerating_load",
+           "hanging_point", "rope_tensions", "static_load"]
 
 TAUT_TOLERANCE = 1e-6
 """A rope within this fraction of its length from full length counts as taut. Far below
@@ -269,3 +272,38 @@ def static_load(anchors_ned: np.ndarray, lengths: np.ndarray, weight: float, *,
         taut = tension > 0.0
     force = tension[:, None] * to_payload / dist[:, None]
     return StaticLoad(payload_ned=p, tension=tension, taut=taut, force_ned=force, weight=weight)
+
+
+def _turning_to_down(direction: np.ndarray) -> np.ndarray:
+    """The rotation (3, 3) that turns the unit vector ``direction`` onto straight down."""
+    axis = np.cross(direction, _DOWN)
+    sin, cos = float(np.linalg.norm(axis)), float(direction @ _DOWN)
+    if sin < 1e-12:
+        return np.eye(3)
+    k = axis / sin
+    cross = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return np.eye(3) + sin * cross + (1.0 - cos) * cross @ cross
+
+
+def accelerating_load(anchors_ned: np.ndarray, lengths: np.ndarray, mass: float,
+                      gravity: float, accel_ned: np.ndarray) -> StaticLoad:
+    """The payload of ``mass`` kg carried at a steady acceleration ``accel_ned`` (3,) m/s^2
+    under ``anchors_ned`` (n, 3) that move with it, on ropes ``lengths`` (stiff ropes).
+
+    Why: in flight the payload accelerates with the team, and its ropes then hold
+    ``M (g - a)`` rather than its weight: it swings back until it hangs along that
+    effective gravity, and the ropes on the side it accelerates towards carry more of
+    it. In the team's accelerating frame this is the payload at rest under a tilted
+    gravity, so it is :func:`static_load` with the anchors turned until the effective
+    gravity points down, turned back. The result is in the world frame, and ``weight``
+    is the payload's true weight ``M g``: ``share`` is the part of the weight each
+    vehicle carries, what a vehicle's thrust must hold up (it can exceed the share at
+    rest). Raises :class:`NoHangingPointError` as :func:`static_load`.
+    """
+    effective = np.array([0.0, 0.0, gravity]) - np.asarray(accel_ned, dtype=np.float64)
+    g_eff = float(np.linalg.norm(effective))
+    turn = _turning_to_down(effective / g_eff)
+    held = static_load(np.asarray(anchors_ned, dtype=np.float64) @ turn.T, lengths,
+                       mass * g_eff)
+    return StaticLoad(payload_ned=turn.T @ held.payload_ned, tension=held.tension,
+                      taut=held.taut, force_ned=held.force_ned @ turn, weight=mass * gravity)

@@ -18,6 +18,10 @@ at z = 0 (NED), the payload hanging below.
   this: one vehicle of the paper's square 5 mm, 2 cm, 5 cm and 8 cm in from its corner
   puts 0.262, 0.308, 0.412 and 0.480 of the payload on each vehicle of the opposite
   diagonal (rigid ropes: 0.5 at any distance).
+* :func:`accelerating_share`: the largest share of any vehicle while the payload
+  accelerates horizontally with the team (up to the guidance's acceleration limit, in
+  any direction): the ropes then hold ``M (g - a)``, and the ropes on the side it
+  accelerates towards carry more of its weight than at rest.
 * :func:`even_rope_lengths`: ropes that hang the payload under the centroid, every
   rope taut (the even share's place: with the vehicles at one altitude the payload's
   horizontal balance puts it there), none steeper than the design rope angle.
@@ -25,15 +29,22 @@ at z = 0 (NED), the payload hanging below.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from gcs.analysis._static_load import StaticLoad, static_load
+from gcs.analysis._static_load import (
+    NoHangingPointError,
+    StaticLoad,
+    accelerating_load,
+    static_load,
+)
 from gcs.config import Team
 
-__all__ = ["WorstLoad", "desired_load", "even_rope_lengths", "hang_depth", "worst_load"]
+__all__ = ["AcceleratingShare", "WorstLoad", "accelerating_share", "desired_load",
+           "even_rope_lengths", "hang_depth", "worst_load"]
 
 _SAMPLES = 96
 """Random displacements tried by :func:`worst_load` (before it climbs)."""
@@ -160,6 +171,55 @@ def worst_load(team: Team, error: float, *, stiffness: float, seed: int = 0,
         else:
             break
     return WorstLoad(best_share, best_vehicle, tension, horizontal, error, best, tried)
+
+
+@dataclass(frozen=True)
+class AcceleratingShare:
+    """The most any vehicle carries while the payload accelerates horizontally."""
+
+    accel: float
+    """The payload's horizontal acceleration, m/s^2."""
+    share: float
+    """Largest fraction of the payload's weight on one vehicle, over the directions and
+    scales tried."""
+    vehicle: int
+    """Its index in team order."""
+    direction: float
+    """Direction of the acceleration that gives it, rad from the team's x axis."""
+    tension: float
+    """The largest rope tension over the directions and scales tried, N."""
+
+
+_DIRECTIONS = 72
+"""Directions of the horizontal acceleration tried (every 5 degrees)."""
+
+
+def accelerating_share(team: Team, accel: float,
+                       scales: tuple[float, ...] = (1.0,)) -> AcceleratingShare:
+    """The largest share of the payload on one vehicle, and the largest rope tension, with
+    the payload accelerating at ``accel`` m/s^2 in any horizontal direction (stiff ropes,
+    the desired shape times each of ``scales``; a scale whose ropes cannot hang the payload
+    is skipped). The payload's share at rest when ``accel`` is 0."""
+    mass, g = team.config.payload.mass, team.config.analysis.gravity
+    ropes = _ropes(team)
+    best = AcceleratingShare(accel, -1.0, 0, 0.0, 0.0)
+    tension = 0.0
+    for scale in scales:
+        anchors = _anchors(scale * np.asarray(team.formation.positions, dtype=np.float64))
+        for psi in np.linspace(0.0, 2.0 * math.pi, _DIRECTIONS if accel > 0.0 else 1,
+                               endpoint=False):
+            a = accel * np.array([math.cos(psi), math.sin(psi), 0.0])
+            try:
+                held = accelerating_load(anchors, ropes, mass, g, a)
+            except ValueError:  # the ropes cannot reach one point at this scale
+                continue
+            tension = max(tension, float(held.tension.max()))
+            if float(held.share.max()) > best.share:
+                best = AcceleratingShare(accel, float(held.share.max()),
+                                         int(np.argmax(held.share)), float(psi), 0.0)
+    if best.share < 0.0:
+        raise NoHangingPointError("the ropes cannot hang the payload at any scale tried")
+    return dataclasses.replace(best, tension=tension)
 
 
 def even_rope_lengths(team: Team) -> np.ndarray:

@@ -15,6 +15,10 @@ vehicle taken from the geometry (:mod:`gcs.analysis._team_load`):
 * the vertical load ``(m + M share) g``, the largest tilt
   ``arccos(load / thrust_reference)`` and the horizontal force left at the bank
   limit ``thrust_reference * sin(bank)``;
+* the share with the payload accelerating with the team at ``limits.accel_norm`` in
+  any direction: its ropes then hold ``M (g - a)``, more of it on the side it
+  accelerates towards (a warning, naming the acceleration limit that keeps it within
+  the design share, when it exceeds that share);
 * the worst share with the vehicles anywhere within ``analysis.position_error`` of
   their places (ropes that give by ``analysis.hold_stiffness``, as the simulator's
   position holds do): a violation when a vehicle cannot hold it at full thrust, a
@@ -56,6 +60,7 @@ import numpy as np
 
 from gcs.analysis._team_load import (
     WorstLoad,
+    accelerating_share,
     desired_load,
     even_rope_lengths,
     hang_depth,
@@ -270,6 +275,10 @@ class Analysis:
                 "design_share": _num(ld.design_share),
                 "even_rope_lengths_m": (None if ld.even_rope_lengths is None
                                         else nums(ld.even_rope_lengths)),
+                "accel_m_s2": _num(ld.accel),
+                "accel_share": _num(ld.accel_share),
+                "accel_vehicle": ld.accel_vehicle,
+                "accel_tension_N": _num(ld.accel_tension),
             },
             "largest_payload_kg": _num(self.largest_payload),
             "lift": {"altitude_m": _num(self.lift_altitude),
@@ -291,7 +300,8 @@ class StaticShares:
     ``tension`` .. ``share`` are at the desired shape (stiff ropes); ``worst_*`` over the
     vehicles anywhere within ``position_error`` of their places, on ropes that give by
     ``hold_stiffness``; ``design_share`` is what the force chain (eq. T, Th, the vertical
-    load) designs for: the larger of the assumed share and the share at rest.
+    load) designs for: the larger of the assumed share and the share at rest; ``accel_*``
+    with the payload accelerating at the guidance's limit (the shapes of ``worst_*``).
     """
 
     rope_lengths: tuple[float, ...]
@@ -313,6 +323,15 @@ class StaticShares:
     worst_vertical_load: float
     design_share: float
     even_rope_lengths: tuple[float, ...] | None
+    accel: float = math.nan
+    """The payload's horizontal acceleration of the ``accel_*`` figures (limits.accel_norm)."""
+    accel_share: float = math.nan
+    """The largest share on one vehicle with the payload accelerating at ``accel`` in any
+    horizontal direction, at the desired shape and at the largest scale flown
+    (:func:`accelerating_share`; a shape shrunk below 1 loads one vehicle more)."""
+    accel_vehicle: int = 0
+    accel_tension: float = math.nan
+    """The largest rope tension then, N."""
 
 
 def _kappa(team: Team) -> float:
@@ -491,12 +510,40 @@ def _load_warnings(team: Team, ld: StaticShares) -> list[str]:
                    f"where the analysis designs for {ld.design_share:.3f}: a vertical load of "
                    f"{_n(ld.worst_vertical_load, 2)} N{over}, {left}; "
                    f"analysis.payload_share: {need} designs for it")
+    if ld.accel_share > ld.design_share + 1e-3:
+        out.append(_accel_warning(team, ld))
     if not ld.determinate and not team.config.flight.load_sharing:
         out.append(f"flight.load_sharing is off: {sum(ld.taut)} taut ropes split the payload "
                    f"by fractions of a millimetre of the shape (the paper's square flew one "
                    f"vehicle at 0.37 of it), so only the worst share "
                    f"{ld.worst_share:.3f} holds, not the design share {ld.design_share:.3f}")
     return out
+
+
+def _accel_warning(team: Team, ld: StaticShares) -> str:
+    """The payload accelerating at the guidance's limit loads a vehicle beyond the design
+    share: by how much, and the acceleration limit that keeps it within."""
+    cfg = team.config
+    rest = max(ld.share)
+    fix = ld.accel * (ld.design_share - rest) / max(ld.accel_share - rest, 1e-12)
+    while fix > 0.0 and accelerating_share(team, fix).share > ld.design_share:  # at scale 1
+        fix *= 0.98  # the share grows nearly in proportion to the acceleration
+    load = (cfg.airframe.mass + cfg.payload.mass * ld.accel_share) * cfg.analysis.gravity
+    over = (f", above the reference thrust {_n(cfg.airframe.thrust_reference, 2)} N"
+            if load >= cfg.airframe.thrust_reference else "")
+    axis = (f" (and limits.accel_axis, now {cfg.limits.accel_axis:g})"
+            if cfg.limits.accel_axis > fix else "")
+    named = (f"limits.accel_norm at most {_floor3(fix)}{axis} keeps it within the design share"
+             if fix >= 0.1 * ld.accel else
+             f"analysis.payload_share: {max(1, math.floor(1.0 / ld.accel_share + 1e-9))} "
+             f"designs for it (any acceleration loads it beyond the share at rest)")
+    chain = _chain(team, cfg.payload.mass, ld.accel_share)
+    left = (f"{_n(chain.max_accel)} m/s^2 of guidance acceleration left"
+            if chain.max_accel > 0.0 else "no guidance acceleration left")
+    return (f"with the payload accelerating at limits.accel_norm {ld.accel:g} m/s^2 vehicle "
+            f"{ld.accel_vehicle} carries {ld.accel_share:.3f} of it, "
+            f"where the analysis designs for {ld.design_share:.3f}: a vertical load of "
+            f"{_n(load, 2)} N{over}, {left}; {named}")
 
 
 def analyze(team: Team) -> Analysis:
@@ -546,11 +593,15 @@ def analyze(team: Team) -> Analysis:
     chain = _chain(team, M, design)
     if ld is not None:
         worst = _worst_flown_load(team, chain.safe_span)
+        flown = tuple(sorted({1.0, flown_scale_max(team, chain.safe_span)}))
+        accelerating = accelerating_share(team, cfg.limits.accel_norm, flown)
         ld = dataclasses.replace(
             ld, worst_share=worst.share, worst_vehicle=f.ids[worst.vehicle],
             position_error=worst.error, worst_tension=worst.tension,
             worst_horizontal=worst.horizontal,
-            worst_vertical_load=(m + M * worst.share) * g)
+            worst_vertical_load=(m + M * worst.share) * g,
+            accel=accelerating.accel, accel_share=accelerating.share,
+            accel_vehicle=f.ids[accelerating.vehicle], accel_tension=accelerating.tension)
         warnings += _load_warnings(team, ld)
     worst_share = ld.worst_share if ld is not None else design
     heaviest = largest_payload(team, design, lhs, worst_share)
@@ -735,6 +786,9 @@ def format_report(a: Analysis, source: str) -> str:
         ("  its vertical load", val(ld.worst_vertical_load, "N")),
         (f"design share: the larger of assumed 1/{a.payload_share} and at rest",
          each((ld.design_share,))),
+        (f"share accelerating at limits.accel_norm {ld.accel:g} m/s^2 "
+         f"(vehicle {ld.accel_vehicle})", each((ld.accel_share,))),
+        ("  its largest rope tension", val(ld.accel_tension, "N")),
     ]
     load_text = (f"(m + M/{a.payload_share}) g" if assumed
                  else f"(m + {ld.design_share:.3f} M) g")
