@@ -7,6 +7,7 @@ config, a missing file) print one line and exit with status 2, never a trace.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import faulthandler
 import signal
 import sys
@@ -45,6 +46,7 @@ def _verify(args: argparse.Namespace, team: Team, analysis: Analysis) -> int:
         check_scenario,
         format_verify,
         load_scenario,
+        parse_gusts,
         parse_jobs,
         parse_seeds,
         verify,
@@ -54,9 +56,10 @@ def _verify(args: argparse.Namespace, team: Team, analysis: Analysis) -> int:
     scenario = args.scenario or str(default_config("scenarios/paper_flight.yaml"))
     seeds = parse_seeds(args.seeds)
     jobs = parse_jobs(args.jobs)
+    gusts = parse_gusts(args.gusts)
     for warning in check_scenario(load_scenario(scenario), team, scenario, analysis=analysis):
         print(f"gcs analyze: warning: {warning}", file=sys.stderr)
-    result = verify(team, scenario, analysis, seeds=seeds, jobs=jobs,
+    result = verify(team, scenario, analysis, seeds=seeds, jobs=jobs, gusts=gusts,
                     progress=lambda line: print(f"gcs analyze --verify: {line}",
                                                 file=sys.stderr, flush=True))
     print(json.dumps(result.to_json()) if args.json else format_verify(result))
@@ -141,6 +144,7 @@ def _cmd_fly(args: argparse.Namespace) -> int:
         flies_real_vehicles,
         fly,
         load_scenario,
+        parse_gusts,
         parse_jobs,
         parse_seeds,
     )
@@ -148,6 +152,7 @@ def _cmd_fly(args: argparse.Namespace) -> int:
 
     seeds = None if args.seeds is None else parse_seeds(args.seeds)
     jobs = parse_jobs(args.jobs)
+    gusts = parse_gusts(args.gusts)
     if seeds is None and jobs is not None:
         raise ConfigError("--jobs", "", "is the number of flights of --seeds at a time: "
                           "give --seeds too")
@@ -174,10 +179,11 @@ def _cmd_fly(args: argparse.Namespace) -> int:
             raise ConfigError("--speed", "", f"must be a positive number or 'max', "
                               f"got {args.speed!r}") from None
     if seeds is not None:
-        return _fly_seeds(args, team, scenario, seeds, jobs)
+        return _fly_seeds(args, team, scenario, seeds, jobs, gusts)
     result = fly(team, scenario, speed=args.speed,
                  record=Path(args.record) if args.record else None, connect=args.connect,
-                 progress=not args.quiet, override_analysis=args.override_analysis)
+                 progress=not args.quiet, override_analysis=args.override_analysis,
+                 gusts=gusts)
     data = result.to_json()
     if args.json:
         print(json.dumps(data))
@@ -189,7 +195,7 @@ def _cmd_fly(args: argparse.Namespace) -> int:
 
 
 def _fly_seeds(args: argparse.Namespace, team: Team, scenario: Scenario,
-               seeds: tuple[int, ...], jobs: int | None) -> int:
+               seeds: tuple[int, ...], jobs: int | None, gusts: float | None) -> int:
     """``gcs fly --seeds``: the scenario flown once per seed, ``jobs`` at a time, and the
     spread of each figure over them (exit 1 if a flight did not complete)."""
     import json
@@ -197,7 +203,7 @@ def _fly_seeds(args: argparse.Namespace, team: Team, scenario: Scenario,
     from gcs.testing import fly_seeds, format_seed_runs
 
     runs = fly_seeds(team, scenario, seeds, jobs=jobs, speed=args.speed or "max",
-                     record=args.record,
+                     record=args.record, gusts=gusts,
                      override_analysis=args.override_analysis,
                      progress=None if args.quiet else lambda line: print(
                          f"gcs fly: {line}", file=sys.stderr, flush=True))
@@ -341,6 +347,14 @@ def _cmd_replay(args: argparse.Namespace) -> int:
         return 2
 
 
+def _add_gusts_option(p: argparse.ArgumentParser) -> None:
+    """``--gusts`` of the commands that fly the simulator."""
+    p.add_argument("--gusts", metavar="M/S",
+                   help="turbulence in the simulator: the gusts' standard deviation per "
+                        "axis, m/s (e.g. 0.5; random, 2 s correlation, from the seed; "
+                        "default calm)")
+
+
 def _add_page_options(p: argparse.ArgumentParser) -> None:
     """Options shared by the commands that serve the live page."""
     p.add_argument("--port", type=int, default=8080, help="port of the page (default 8080)")
@@ -390,6 +404,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "7, 1,3,9-10")
     p.add_argument("--jobs", metavar="N",
                    help="flights of --verify at a time (default: the machine's cores)")
+    _add_gusts_option(p)
     p.set_defaults(func=_cmd_analyze)
 
     p = sub.add_parser("sim", help="host a simulated team behind zenoh (and UDP)",
@@ -426,6 +441,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "flight, seed 0); with --record FILE each to FILE_seedN.tlog")
     p.add_argument("--jobs", metavar="N",
                    help="flights of --seeds at a time (default: the machine's cores)")
+    _add_gusts_option(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     _add_flight_options(p)
@@ -532,10 +548,18 @@ def _add_certs_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) 
     p.set_defaults(func=_cmd_certs)
 
 
+def _tell_where_on_sigusr1() -> None:
+    """``kill -USR1 PID``: a stuck gcs prints every thread's stack on stderr. Not where
+    stderr is no file (main() called in a process whose stderr is captured in memory)."""
+    if not hasattr(signal, "SIGUSR1"):
+        return
+    with contextlib.suppress(AttributeError, ValueError, OSError):  # no fileno
+        faulthandler.register(signal.SIGUSR1, all_threads=True)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``gcs`` console script."""
-    if hasattr(signal, "SIGUSR1"):  # `kill -USR1 PID`: a stuck gcs says where, on stderr
-        faulthandler.register(signal.SIGUSR1, all_threads=True)
+    _tell_where_on_sigusr1()
     parser = build_parser()
     args, rest = parser.parse_known_args(argv)
     if args.command == "sim":

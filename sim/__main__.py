@@ -12,6 +12,7 @@ port in use) exit with status 1. See "The sim host" in sim/README.md.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import logging
 import signal
 import sys
@@ -21,6 +22,7 @@ from gcs.common import ConfigError
 from gcs.config import load_team
 from gcs.transport import DEFAULT_ENDPOINT
 from sim._config import load_world_config
+from sim._faults import GUST_MAX_M_S
 from sim._host import SimHost
 from sim._options import HostOptions
 from sim._ready_team import DEFAULT_AUTOPILOT_CONFIG, DEFAULT_WORLD_CONFIG
@@ -52,6 +54,20 @@ def _speed(text: str) -> str | float:
     return value
 
 
+def _gusts(text: str | None) -> float | None:
+    """``--gusts``: a gust standard deviation, m/s per axis, 0 up to a gale (None: the
+    world's)."""
+    if text is None:
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        value = -1.0
+    if not 0.0 <= value <= GUST_MAX_M_S:  # also NaN
+        raise ValueError(f"--gusts: expected 0 to {GUST_MAX_M_S:g} m/s per axis, got {text!r}")
+    return value
+
+
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="python -m sim",
@@ -79,6 +95,10 @@ def _parser() -> argparse.ArgumentParser:
                         "role, with the certificates `gcs certs DIR` made (ca.pem, sim.pem, "
                         "sim.key); tcp/ endpoints become tls/")
     p.add_argument("--seed", type=int, default=0, help="seed of sensor noise and gusts")
+    p.add_argument("--gusts", default=None, metavar="M/S",
+                   help="turbulent wind: standard deviation of the gust velocity per axis, m/s "
+                        "(a random gust of 2 s correlation, seeded by --seed; default: the "
+                        "world's, none)")
     p.add_argument("--duration", type=float, default=None, metavar="S",
                    help="stop after S seconds of sim time (default: run until stopped)")
     p.add_argument("--fleet", default=None,
@@ -119,6 +139,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         options = _options(args)
         team = load_team(args.config)
         world_config = load_world_config(DEFAULT_WORLD_CONFIG)
+        gusts = _gusts(args.gusts)
+        if gusts is not None:
+            world_config = dataclasses.replace(
+                world_config, wind=dataclasses.replace(world_config.wind, gust_std=gusts))
         autopilot_config = load_autopilot_config(DEFAULT_AUTOPILOT_CONFIG)
     except (ConfigError, ValueError) as exc:
         print(f"sim: error: {exc}", file=sys.stderr)

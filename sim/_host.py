@@ -114,6 +114,7 @@ class SimHost:
         self._status = [VehicleStatus.LIVE] * len(self._sysids)
         self._cut_until: dict[int, float] = {}  # vehicle index -> sim time its timed cut ends
         self._wind_mean = self._world.params.wind_mean.copy()  # the world config's
+        self._gust_std = world_config.wind.gust_std
         self._gusts: list[tuple[float, np.ndarray]] = []  # (sim time it ends, wind it adds)
         self._controls: list[bytes] = []  # control messages to act on at the next chunk
         self._pacer = Pacer(options.speed)
@@ -174,6 +175,8 @@ class SimHost:
             parts.append("background")
         if self._options.separate_origins:
             parts.append("separate origins")
+        if self._gust_std > 0.0:
+            parts.append(f"gusts {self._gust_std:g} m/s")
         if not self._signing_keys:
             parts.append("UNSIGNED (--insecure: anyone who reaches a port commands the vehicles)")
         if self._udp is not None:

@@ -117,7 +117,8 @@ def test_a_team_the_analysis_refuses_is_not_flown(tmp_path: Path) -> None:
     assert "flying" not in out.stderr
 
 
-@pytest.mark.parametrize("args", [("--seeds", "4-1"), ("--seeds", "x"), ("--jobs", "0")])
+@pytest.mark.parametrize("args", [("--seeds", "4-1"), ("--seeds", "x"), ("--jobs", "0"),
+                                  ("--gusts", "-0.5"), ("--gusts", "nan")])
 def test_bad_verify_options_are_one_line(args: tuple[str, str]) -> None:
     out = run_gcs("analyze", SQUARE, "--verify", *args)
     assert out.returncode == 2

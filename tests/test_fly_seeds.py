@@ -159,13 +159,15 @@ def test_the_spread_is_of_the_completed_flights() -> None:
     assert s["payload_lift_m"].worst_seed == 2  # the least lift
 
 
-@pytest.mark.parametrize("args", [
-    ("--seeds", "4-1"), ("--seeds", "1-3", "--jobs", "two"), ("--jobs", "2"),
-    ("--seeds", "1", "--connect", "tcp/127.0.0.1:7447")])
-def test_bad_seeds_or_jobs_are_one_line_naming_the_option(args: tuple[str, ...]) -> None:
+@pytest.mark.parametrize(("args", "bad"), [
+    (("--seeds", "4-1"), "--seeds"), (("--seeds", "1-3", "--jobs", "two"), "--jobs"),
+    (("--jobs", "2"), "--jobs"), (("--seeds", "1", "--connect", "tcp/127.0.0.1:7447"), "--seeds"),
+    (("--gusts", "-1"), "--gusts"), (("--seeds", "1", "--gusts", "strong"), "--gusts"),
+    (("--gusts", "0.5", "--connect", "tcp/127.0.0.1:7447"), "--gusts")])
+def test_bad_seeds_jobs_or_gusts_are_one_line_naming_the_option(args: tuple[str, ...],
+                                                                bad: str) -> None:
     out = run_gcs("fly", "--config", SQUARE, "--scenario", SHORT, *args)
     assert out.returncode == 2, out.stdout + out.stderr
-    bad = args[-2] if args[-2] in ("--seeds", "--jobs") else "--seeds"
     assert len(out.stderr.strip().splitlines()) == 1 and f"error: {bad}: " in out.stderr, \
         out.stderr
     assert out.stdout == ""

@@ -86,7 +86,9 @@ def test_bad_config_is_one_line_and_exit_status_2(tmp_path: Path,
     assert "payload.mass" in result.stderr
     for args, named in ((("--config", str(tmp_path / "missing.yaml")), "missing.yaml"),
                         (("--config", str(CONFIG), "--listen", "tcp-127.0.0.1"), "listen"),
-                        (("--config", str(CONFIG), "--duration", "-1"), "duration")):
+                        (("--config", str(CONFIG), "--duration", "-1"), "duration"),
+                        (("--config", str(CONFIG), "--gusts", "40"), "--gusts"),
+                        (("--config", str(CONFIG), "--gusts", "nan"), "--gusts")):
         assert sim_main(list(args)) == 2
         out, err = capsys.readouterr()
         assert out == "" and err.startswith("sim: error: ") and err.count("\n") == 1, err
@@ -174,8 +176,8 @@ def test_duration_runs_as_fast_as_possible_and_exits_by_itself() -> None:
     start_wall = time.monotonic()
     with running("--config", str(CONFIG), "--listen", f"tcp/127.0.0.1:{free_tcp_port()}",
                  "--fleet", f"simcli-{uuid.uuid4().hex[:8]}", "--speed", "max", "--duration",
-                 "3") as (proc, ready):
-        assert ready.endswith("speed max")
+                 "3", "--gusts", "0.5") as (proc, ready):
+        assert ready.endswith("speed max, gusts 0.5 m/s")
         _, err = proc.communicate(timeout=60)
     assert proc.returncode == 0, err
     assert "sim: stopped at t = 3.000 s" in err

@@ -1,10 +1,10 @@
 """``gcs.testing.SimTeam``: a simulated team flown from a test, in lockstep, with faults.
 
 Real parts: the simulator process, zenoh on loopback, signed MAVLink, the GCS's
-loop. One flight with a timed cut link, a gust and a killed vehicle is flown
-twice with the same seed (the second with a CPU hog beside it): the faults act
-at the sim time of the call and end on the sim's clock, the gust pushes the
-team, the kill fails the next step naming the vehicle, and the two flights'
+loop. One flight in turbulence (``gusts=0.5``) with a timed cut link, a gust and a
+killed vehicle is flown twice with the same seed (the second with a CPU hog beside
+it): the faults act at the sim time of the call and end on the sim's clock, the gust
+pushes the team, the kill fails the next step naming the vehicle, and the two flights'
 figures are the same to the last digit.
 """
 
@@ -41,7 +41,8 @@ class Flown:
 
 def fly_with_faults(seed: int, *, hog: bool = False) -> Flown:
     """The flight; ``hog``: with a CPU hog beside it once the simulator is up."""
-    with SimTeam(SQUARE, seed=seed) as team, busy(hog):
+    with SimTeam(SQUARE, seed=seed, gusts=0.5) as team, busy(hog):
+        assert team._flight.sim is not None and "gusts 0.5 m/s" in team._flight.sim.ready_line
         team.arm()
         team.takeoff()
         team.lift()

@@ -107,6 +107,8 @@ class HeadlessFlight:
         record: .tlog file to record to, or None.
         connect: zenoh endpoint of a running simulator to join instead of starting one.
         seed: of the started simulator's sensor noise and gusts.
+        gusts: the started simulator's turbulence, m/s per axis (``python -m sim
+            --gusts``; None: its world's, calm).
         override_analysis: fly although ``gcs analyze`` refuses the team.
         lockstep: acknowledge every tick of the simulator started here, or of the one
             joined if it was started with ``--lockstep`` (refused at once where that
@@ -118,12 +120,18 @@ class HeadlessFlight:
     def __init__(self, team: Team, *, speed: str | None = None, record: Path | None = None,
                  connect: str | None = None, seed: int = 0, override_analysis: bool = False,
                  lockstep: bool = True, say: Callable[[str], None] | None = None,
-                 ready_timeout: float = 60.0) -> None:
+                 ready_timeout: float = 60.0, gusts: float | None = None) -> None:
         self.team = team
         self.real = flies_real_vehicles(team)
         """The team's links reach real autopilots: wall clock, no simulator."""
         if self.real:
             _check_real(team, speed, connect)
+        if gusts is not None and (self.real or connect is not None):
+            where = (f"the links of {team.source} reach px4/ardupilot autopilots"
+                     if self.real else f"the simulator joined at {connect} has its own "
+                     f"(python -m sim --gusts)")
+            raise ConfigError("--gusts", "", f"sets the wind of a simulator started here, but "
+                              f"{where}: leave it out")
         line = signing_line(team.config.gcs, Path(team.source).parent)  # the key, before the sim
         if say is not None:
             say(line)
@@ -140,7 +148,9 @@ class HeadlessFlight:
             self.endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
             self.sim = SimProcess(team.source, endpoint=self.endpoint, speed=speed or "max",
                                   lockstep=lockstep, signing=team.config.gcs.signing,
-                                  extra=("--seed", str(seed)), ready_timeout=ready_timeout)
+                                  extra=("--seed", str(seed),
+                                         *(() if gusts is None else ("--gusts", repr(gusts)))),
+                                  ready_timeout=ready_timeout)
         else:
             if speed is not None:
                 raise ConfigError("--speed", "", f"paces a simulator started here; the one "
@@ -283,11 +293,13 @@ class HeadlessFlight:
 
 def fly(team: Team, scenario: Scenario, *, speed: str | None = None,
         record: Path | None = None, connect: str | None = None, progress: bool = True,
-        override_analysis: bool = False, seed: int = 0) -> FlightResult:
+        override_analysis: bool = False, seed: int = 0,
+        gusts: float | None = None) -> FlightResult:
     """Fly ``scenario``; blocks until it ends. ``speed``: of the sim (default ``"max"``;
     real vehicles: 1 only); ``connect``: endpoint of a running sim; ``seed``: of the
-    started sim's sensor noise and gusts. A team on px4/ardupilot links flies those
-    (:class:`HeadlessFlight`); a bad ``speed`` or ``connect`` for it is a ConfigError."""
+    started sim's sensor noise and gusts; ``gusts``: its turbulence, m/s per axis. A
+    team on px4/ardupilot links flies those (:class:`HeadlessFlight`); a bad ``speed``,
+    ``connect`` or ``gusts`` for it is a ConfigError."""
 
     def say(line: str) -> None:
         if progress:
@@ -295,7 +307,7 @@ def fly(team: Team, scenario: Scenario, *, speed: str | None = None,
 
     error: str | None = None
     with HeadlessFlight(team, speed=speed, record=record, connect=connect, seed=seed,
-                        override_analysis=override_analysis, say=say) as flight:
+                        override_analysis=override_analysis, say=say, gusts=gusts) as flight:
 
         def show(k: int, step: Step) -> None:
             if progress:

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import math
 import multiprocessing
 import os
 import sys
@@ -30,7 +31,8 @@ from gcs.app._scenario import Scenario
 from gcs.common import ConfigError
 from gcs.config import Team, signing_line
 
-__all__ = ["SeedFlight", "fly_seed", "fly_seeds_in_parallel", "jobs_for", "parse_jobs",
+__all__ = ["SeedFlight", "fly_seed", "fly_seeds_in_parallel", "jobs_for", "parse_gusts",
+           "parse_jobs",
            "parse_seeds", "seed_record", "seeds_text"]
 
 R = TypeVar("R")
@@ -64,6 +66,20 @@ def parse_jobs(text: str | int | None) -> int | None:
         raise ConfigError("--jobs", "", f"expected the number of flights at a time, at "
                           f"least 1, got {str(text)!r}")
     return jobs
+
+
+def parse_gusts(text: str | float | None) -> float | None:
+    """``--gusts``: the simulator's turbulence, m/s per axis, 0 or more (None: calm)."""
+    if text is None:
+        return None
+    try:
+        gusts = float(text)
+    except ValueError:
+        gusts = math.nan
+    if not (math.isfinite(gusts) and gusts >= 0.0):
+        raise ConfigError("--gusts", "", f"expected the gusts' standard deviation per axis, "
+                          f"0 or more m/s (e.g. 0.5), got {str(text)!r}")
+    return gusts
 
 
 def seeds_text(seeds: Sequence[int]) -> str:
@@ -112,7 +128,7 @@ class SeedFlight:
 
 def fly_seed(team: Team, scenario: Scenario, seed: int, *, speed: str = "max",
              record: str | None = None, progress: bool = False,
-             override_analysis: bool = False) -> SeedFlight:
+             override_analysis: bool = False, gusts: float | None = None) -> SeedFlight:
     """In a worker process: fly ``scenario`` with the simulator's ``seed``, recorded to
     :func:`seed_record` of ``record`` if given; with ``progress``, the flight's lines go
     to stderr, each prefixed with the seed."""
@@ -120,7 +136,7 @@ def fly_seed(team: Team, scenario: Scenario, seed: int, *, speed: str = "max",
     path = None if record is None else seed_record(record, seed)
     with contextlib.redirect_stderr(_Prefixed(sys.stderr, f"  seed {seed}: ")):
         result = fly(team, scenario, speed=speed, record=path, progress=progress, seed=seed,
-                     override_analysis=override_analysis)
+                     override_analysis=override_analysis, gusts=gusts)
     return SeedFlight(seed=seed, result=result, wall_s=time.monotonic() - wall0)
 
 

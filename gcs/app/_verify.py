@@ -229,6 +229,8 @@ class VerifyResult:
     wall_s: float
     flights: tuple[FlightFigures, ...]
     rows: tuple[Row, ...]
+    gusts: float = 0.0
+    """The simulator's turbulence, m/s per axis (0: calm)."""
 
     @property
     def failed_flights(self) -> tuple[FlightFigures, ...]:
@@ -247,6 +249,7 @@ class VerifyResult:
         return {
             "team": self.team, "scenario": self.scenario, "seeds": list(self.seeds),
             "jobs": self.jobs, "wall_s": round(self.wall_s, 1),
+            "gusts_m_s": _num(self.gusts),
             "figures": [r.to_json() for r in self.rows],
             "flights": [{"seed": f.seed, "completed": f.completed, "error": f.error,
                          "wall_s": round(f.wall_s, 1), "share": _num(f.share),
@@ -276,8 +279,9 @@ def format_verify(result: VerifyResult) -> str:
                      "OK" if r.ok else "EXCEEDED"))
     widths = [max(len(row[i]) for row in (head, *body)) for i in range(len(head))]
     lines = [f"verification of {result.team} in the simulator: {result.scenario}, "
-             f"seeds {seeds_text(result.seeds)}, {result.jobs} at a time, "
-             f"{result.wall_s:.0f} s"]
+             f"seeds {seeds_text(result.seeds)}, "
+             f"{f'gusts {result.gusts:g} m/s per axis' if result.gusts else 'calm'}, "
+             f"{result.jobs} at a time, {result.wall_s:.0f} s"]
     lines += ["  " + "  ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)).rstrip()
               for row in (head, *body)]
     lines += [f"FLIGHT seed {f.seed} did not complete: {f.error}" for f in result.failed_flights]
@@ -294,9 +298,9 @@ def format_verify(result: VerifyResult) -> str:
 
 
 def _fly_and_measure(team: Team, scenario: Scenario, record: str, progress: bool,
-                     seed: int) -> FlightFigures:
+                     gusts: float | None, seed: int) -> FlightFigures:
     """In a worker process: fly one seed, recorded, and measure it."""
-    flight = fly_seed(team, scenario, seed, record=record, progress=progress)
+    flight = fly_seed(team, scenario, seed, record=record, progress=progress, gusts=gusts)
     result = flight.result
     weight = team.config.payload.mass * team.config.analysis.gravity
     try:
@@ -311,9 +315,10 @@ def _fly_and_measure(team: Team, scenario: Scenario, record: str, progress: bool
 def verify(team: Team, scenario: str | Path, analysis: Analysis, *,
            seeds: Sequence[int] = (1, 2, 3, 4), jobs: int | None = None,
            progress: Callable[[str], None] | None = None,
-           flight_progress: bool = True) -> VerifyResult:
+           flight_progress: bool = True, gusts: float | None = None) -> VerifyResult:
     """Fly ``scenario`` once per seed, ``jobs`` flights at a time (default: the machine's
-    cores), and compare the worst of each figure with ``analysis``.
+    cores), and compare the worst of each figure with ``analysis``. ``gusts``: the
+    simulator's turbulence, m/s per axis (None: its world's, calm).
 
     ``progress`` gets one line per flight started and ended; ``flight_progress``
     lets each flight print its steps on stderr, prefixed with its seed.
@@ -322,7 +327,7 @@ def verify(team: Team, scenario: str | Path, analysis: Analysis, *,
     wall0 = time.monotonic()
     with tempfile.TemporaryDirectory(prefix="gcs-verify-") as tmp:
         work = functools.partial(_fly_and_measure, team, load_scenario(scenario),
-                                 str(Path(tmp) / "flight.tlog"), flight_progress)
+                                 str(Path(tmp) / "flight.tlog"), flight_progress, gusts)
         flights = fly_seeds_in_parallel(
             team, work, seeds, jobs=jobs, say=progress, error_of=lambda f: f.error,
             lost=lambda seed, why: FlightFigures(seed=seed, completed=False, wall_s=0.0,
@@ -330,4 +335,5 @@ def verify(team: Team, scenario: str | Path, analysis: Analysis, *,
     name = Path(scenario).stem
     return VerifyResult(team=team.config.name, scenario=name, seeds=tuple(seeds), jobs=jobs,
                         wall_s=time.monotonic() - wall0, flights=tuple(flights),
-                        rows=tuple(compare(predictions(analysis, team), flights)))
+                        rows=tuple(compare(predictions(analysis, team), flights)),
+                        gusts=gusts or 0.0)

@@ -194,12 +194,14 @@ def fly_seeds(config: str | Path | Team, scenario: str | Path | Scenario,
               seeds: Sequence[int] | str, *, jobs: int | None = None, speed: str = "max",
               record: str | Path | None = None, insecure: bool = False,
               override_analysis: bool = False,
-              progress: Callable[[str], None] | None = None) -> SeedRuns:
+              progress: Callable[[str], None] | None = None,
+              gusts: float | None = None) -> SeedRuns:
     """Fly ``scenario`` once per seed of the simulator (``"1-20"`` or a list), each in
     lockstep in a process of its own, ``jobs`` at a time (default: the machine's cores).
 
     ``record``: each flight to a .tlog named after it and its seed
-    (``runs/f.tlog`` gives ``runs/f_seed3.tlog``); ``progress`` gets a line as the
+    (``runs/f.tlog`` gives ``runs/f_seed3.tlog``); ``gusts``: the simulator's
+    turbulence, m/s per axis (None: calm); ``progress`` gets a line as the
     flights start and one per flight that ends. A flight that did not complete is in
     :attr:`SeedRuns.failed` with its reason; the summary is of the completed ones.
     """
@@ -213,7 +215,7 @@ def fly_seeds(config: str | Path | Team, scenario: str | Path | Scenario,
     jobs = jobs_for(jobs, len(seeds))
     work = functools.partial(fly_seed, team, plan, speed=speed,
                              record=None if record is None else str(record),
-                             override_analysis=override_analysis)
+                             override_analysis=override_analysis, gusts=gusts)
     wall0 = time.monotonic()
     flights = fly_seeds_in_parallel(team, work, seeds, jobs=jobs, lost=_lost, say=progress,
                                     error_of=lambda f: f.result.error)

@@ -19,7 +19,7 @@ import math
 from collections.abc import Sequence
 from pathlib import Path
 
-from gcs.app import HeadlessFlight
+from gcs.app import HeadlessFlight, parse_gusts
 from gcs.config import Team as LoadedTeam
 from gcs.config import load_team
 from gcs.testing._team import FlightError, Team
@@ -45,6 +45,8 @@ class SimTeam(Team):
     Args:
         config: team file (or a loaded :class:`gcs.config.Team`).
         seed: of the simulator's sensor noise and gusts: one seed, one flight.
+        gusts: turbulence, the gusts' standard deviation per axis, m/s (random, 2 s
+            correlation, drawn from ``seed``; None: calm). :meth:`gust` adds a steady one.
         speed: sim seconds per wall second, or ``"max"``: as fast as the machine goes.
         record: .tlog file to record the flight to (``gcs report`` reads it).
         lockstep: the GCS acknowledges every tick (repeatable); False lets the simulator
@@ -58,14 +60,15 @@ class SimTeam(Team):
     def __init__(self, config: str | Path | LoadedTeam, *, seed: int = 0,
                  speed: float | str = "max", record: str | Path | None = None,
                  lockstep: bool = True, insecure: bool = False,
-                 override_analysis: bool = False, start_timeout: float = 300.0) -> None:
+                 override_analysis: bool = False, start_timeout: float = 300.0,
+                 gusts: float | None = None) -> None:
         team = config if isinstance(config, LoadedTeam) else load_team(config)
         if insecure:
             team = team.without_signing()
         super().__init__(HeadlessFlight(
             team, speed=_speed(speed, lockstep), record=None if record is None else Path(record),
             seed=_whole(seed, "seed"), override_analysis=override_analysis, lockstep=lockstep,
-            ready_timeout=start_timeout))
+            ready_timeout=start_timeout, gusts=parse_gusts(gusts)))
 
     # -- faults ---------------------------------------------------------------------------
 
