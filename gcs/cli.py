@@ -15,7 +15,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from gcs.common import ConfigError
+from gcs.common import ConfigError, stop_on_signals
 
 if TYPE_CHECKING:
     from gcs.analysis import Analysis
@@ -560,6 +560,7 @@ def _tell_where_on_sigusr1() -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``gcs`` console script."""
     _tell_where_on_sigusr1()
+    stop_on_signals()
     parser = build_parser()
     args, rest = parser.parse_known_args(argv)
     if args.command == "sim":

@@ -179,15 +179,21 @@ def wait_or_tell(proc: subprocess.Popen[str], seconds: float, err: IO[str]) -> i
         pytest.fail(f"gcs did not stop within {seconds:g} s of Ctrl-C; its stderr:\n{err.read()}")
 
 
+def _ignore_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 @contextmanager
-def served(path: Path) -> Iterator[tuple[int, list[str]]]:
+def served(path: Path, *, sigint_ignored: bool = False) -> Iterator[tuple[int, list[str]]]:
     """``gcs replay PATH`` in its own process: its port, and its stdout lines from its
-    address on, once stopped (by Ctrl-C, which must end it with status 0)."""
+    address on, once stopped (by Ctrl-C, which must end it with status 0).
+    ``sigint_ignored``: started as a non-interactive shell starts a command in the
+    background, with SIGINT ignored."""
     port = free_tcp_port()
     with tempfile.TemporaryFile("w+") as err:
         proc = subprocess.Popen([sys.executable, "-m", "gcs", "replay", str(path), "--port",
                                  str(port), "--quiet"], stdout=subprocess.PIPE, stderr=err,
-                                text=True)
+                                text=True, preexec_fn=_ignore_sigint if sigint_ignored else None)
         assert proc.stdout is not None
         out = OutputLines(proc.stdout)
         lines: list[str] = []
@@ -210,6 +216,14 @@ def served(path: Path) -> Iterator[tuple[int, list[str]]]:
             if proc.poll() is None:
                 proc.kill()
                 proc.wait()
+
+
+def test_ctrl_c_stops_a_replay_started_in_the_background_of_a_script(flight: Path) -> None:
+    """``gcs replay LOG &`` in a shell script starts with SIGINT ignored; Ctrl-C (SIGINT)
+    must stop it all the same (it ran on for ever: the CI's background runs saw it)."""
+    with served(flight, sigint_ignored=True) as (_port, lines):
+        pass
+    assert lines[1:] == ["stopping…"]
 
 
 def test_the_waits_on_a_page_and_a_process_end() -> None:

@@ -601,7 +601,11 @@ def test_the_pilot_flies_the_team_with_buttons_keys_and_sticks(pilot, demo: Demo
         guidance.click()
         wait_for(lambda: "guidance on" in text(pilot, "operator"), 5, "guidance on shown")
         commanded(pilot, "fwd", lambda v: v < -0.9, "fwd < -0.9: S held, guidance on")()
-        time.sleep(1.5)  # and brakes the drift W left: the geofence is 4 m from the start
+        # and brakes the drift W left (the geofence is 4 m from the start) until the team
+        # moves north no more: on a loaded machine a fixed 1.5 s left it drifting into the
+        # fence's slowdown, which then spoiled the sticks' steps below
+        wait_for(lambda: demo.velocity()[0] < 0.05, 10, "the drift north braked by S",
+                 lambda: situation(pilot, demo))
     finally:
         keyboard.up("s")
     print(f"guidance off, S held 2 s: speed {np.linalg.norm(before):.3f} -> "

@@ -12,16 +12,13 @@ in that order. The page binds 127.0.0.1 unless another host is asked for.
 
 from __future__ import annotations
 
-import signal
 import sys
-import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
-from types import FrameType
 
 from gcs.app import GcsApp, SimProcess, free_tcp_port
-from gcs.common import LOCAL_CONFIGS, default_config
+from gcs.common import LOCAL_CONFIGS, default_config, stop_on_signals
 from gcs.config import load_team, signing_line
 from gcs.loop import Action, Gamepad, PhaseError, load_gamepad_config
 from gcs.transport import ZenohSettings
@@ -81,16 +78,6 @@ def _start_gamepad(app: GcsApp, mapping: Path | None,
     return pad
 
 
-def _raise_interrupt(_signum: int, _frame: FrameType | None) -> None:
-    raise KeyboardInterrupt
-
-
-def _stop_on_sigterm() -> None:
-    """Treat SIGTERM like Ctrl-C, so a terminated demo still stops its simulator."""
-    if threading.current_thread() is threading.main_thread():
-        signal.signal(signal.SIGTERM, _raise_interrupt)
-
-
 def serve(app: GcsApp, *, host: str, port: int, gamepad: Path | None, no_gamepad: bool,
           alive: Callable[[], bool] = lambda: True) -> int:
     """Run ``app`` with its page (and gamepad) until Ctrl-C or ``alive()`` turns False."""
@@ -125,7 +112,7 @@ def run_demo(config: str, *, host: str, port: int, gamepad: Path | None,
     up behind a busy machine's telemetry (on the sim clock they did not, and the
     vehicles went into hold).
     """
-    _stop_on_sigterm()
+    stop_on_signals()
     team = load_team(config)
     if insecure:
         team = team.without_signing()
@@ -148,7 +135,7 @@ def run_gcs(config: str, *, host: str, port: int, record: Path | None,
             gamepad: Path | None, no_gamepad: bool, insecure: bool = False,
             override_analysis: bool = False) -> int:
     """GCS on the wall clock for the config's links + page; blocks until stopped."""
-    _stop_on_sigterm()
+    stop_on_signals()
     team = load_team(config)
     if insecure:
         team = team.without_signing()

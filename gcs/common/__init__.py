@@ -14,6 +14,7 @@ Modules:
                        package.
     ``_shipped``       Where the configs shipped with the project are, in a checkout and
                        once installed.
+    ``_signals``       Ctrl-C and SIGTERM stop a command, whatever started it.
     ``_threads``       Stopping a thread and saying so when it will not stop.
     ``_typed_config``  Typed, validated configuration objects built from YAML.
 """
@@ -22,6 +23,7 @@ from gcs.common._gravity import STANDARD_GRAVITY
 from gcs.common._jit_cache import kernel
 from gcs.common._lazy import lazy_modules
 from gcs.common._shipped import LOCAL_CONFIGS, default_config, shipped_config
+from gcs.common._signals import stop_on_signals
 from gcs.common._threads import join_thread
 from gcs.common._typed_config import ConfigError, FieldError, field, from_mapping, load_yaml
 
@@ -38,4 +40,5 @@ __all__ = [
     "lazy_modules",
     "load_yaml",
     "shipped_config",
+    "stop_on_signals",
 ]
