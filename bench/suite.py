@@ -4,7 +4,8 @@ with CPU hogs beside it.
 Why: the suite must pass whatever else the machine runs (a developer's laptop, a
 shared CI host); a test that fails under load checks the load, not the code. Each
 run starts ``--hogs`` processes that keep a core busy each, runs the pytest part of
-the README's test command (``.ci/run``'s last line, so the two cannot drift) and
+the README's test command (``.ci/run``'s last line, so the two cannot drift: each of
+its pytest commands in turn) and
 stops the hogs. Prints a line per run, then one JSON object on the last line:
 
     {"runs": 3, "hogs": 2, "command": "...", "passed": [true, ...],
@@ -32,42 +33,50 @@ from continuity import hogs
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def pytest_command() -> list[str]:
-    """The pytest part of the test command ``.ci/run`` runs (the README's)."""
+def pytest_commands() -> list[list[str]]:
+    """The pytest parts of the test command ``.ci/run`` runs (the README's), in order."""
     last = (ROOT / ".ci" / "run").read_text().strip().splitlines()[-1]
-    for part in last.split("&&"):
-        argv = shlex.split(part)
-        if "pytest" in argv:
-            return argv
-    raise SystemExit(f"bench/suite.py: no pytest in .ci/run's last line: {last!r}")
+    runs = [argv for argv in (shlex.split(part) for part in last.split("&&")) if "pytest" in argv]
+    if not runs:
+        raise SystemExit(f"bench/suite.py: no pytest in .ci/run's last line: {last!r}")
+    return runs
 
 
 def with_workers(argv: list[str], workers: int) -> list[str]:
-    """``argv`` with its ``-n N`` replaced by ``workers`` (none for 1; as it is for 0)."""
-    if workers <= 0:
+    """``argv`` with its ``-n N`` replaced by ``workers`` (none for 1; as it is for 0, or
+    for a command that runs in one process)."""
+    if workers <= 0 or "-n" not in argv:
         return argv
     kept = [a for i, a in enumerate(argv) if a != "-n" and (i == 0 or argv[i - 1] != "-n")]
     return kept + (["-n", str(workers)] if workers > 1 else [])
 
 
-def run_once(argv: list[str], hog_count: int, keep: Path) -> tuple[bool, float, list[str]]:
-    """One run of the suite beside ``hog_count`` hogs, its output written to ``keep``:
+def run_once(commands: list[list[str]], hog_count: int,
+             keep: Path) -> tuple[bool, float, list[str]]:
+    """One run of the suite (each of ``commands`` in turn, as the README's ``&&`` chain:
+    a failed one stops it) beside ``hog_count`` hogs, its output written to ``keep``:
     passed, wall seconds, failures."""
     busy = hogs(hog_count)
+    text, ok = "", True
     try:
         started = time.monotonic()
-        out = subprocess.run(argv, cwd=ROOT, capture_output=True, text=True, check=False)
+        for argv in commands:
+            out = subprocess.run(argv, cwd=ROOT, capture_output=True, text=True, check=False)
+            text += out.stdout + out.stderr
+            tail = out.stdout.strip().splitlines()[-1:] or ["(no output)"]
+            print(f"  {shlex.join(argv)}: {tail[0]} (output: {keep})", flush=True)
+            if out.returncode != 0:
+                ok = False
+                break
         wall = time.monotonic() - started
     finally:
         for p in busy:
             p.kill()
             p.wait()
-    keep.write_text(out.stdout + out.stderr)
-    failed = [line.split(" - ")[0] for line in out.stdout.splitlines()
+    keep.write_text(text)
+    failed = [line.split(" - ")[0] for line in text.splitlines()
               if line.startswith(("FAILED ", "ERROR "))]
-    tail = out.stdout.strip().splitlines()[-1:] or ["(no output)"]
-    print(f"  {tail[0]} (output: {keep})", flush=True)
-    return out.returncode == 0, wall, failed
+    return ok, wall, failed
 
 
 def main() -> int:
@@ -82,14 +91,13 @@ def main() -> int:
     args = parser.parse_args()
     keep = args.keep or Path(tempfile.mkdtemp(prefix="suite-"))
     keep.mkdir(parents=True, exist_ok=True)
-    argv = with_workers(pytest_command(), args.workers)
-    summary: dict[str, object] = {"runs": args.runs, "hogs": args.hogs,
-                                  "command": shlex.join(argv)}
+    commands = [with_workers(argv, args.workers) for argv in pytest_commands()]
+    command = " && ".join(shlex.join(argv) for argv in commands)
+    summary: dict[str, object] = {"runs": args.runs, "hogs": args.hogs, "command": command}
     passed, walls, failures = [], [], []
     for k in range(args.runs):
-        print(f"run {k + 1}/{args.runs}: {shlex.join(argv)} beside {args.hogs} hog(s)",
-              flush=True)
-        ok, wall, failed = run_once(argv, args.hogs, keep / f"run{k + 1}.log")
+        print(f"run {k + 1}/{args.runs}: {command} beside {args.hogs} hog(s)", flush=True)
+        ok, wall, failed = run_once(commands, args.hogs, keep / f"run{k + 1}.log")
         passed.append(ok)
         walls.append(round(wall, 1))
         failures.append(failed)

@@ -9,9 +9,11 @@ updates a second reach it. The tests share one demo and run in file order:
 a viewer whose connection stops (its badge says STALE, then it reconnects),
 fly from the page, then a second viewer, then the abort (from the keyboard, and
 the always-visible button at a small window with the panels collapsed), then
-Ctrl-C, then the button of a page whose server is gone. On several pytest-xdist
-workers the file stays on one of them, in this order (its ``xdist_group``; the
-suite runs with ``--dist loadgroup``). Screenshots go to the pytest temporary
+Ctrl-C, then the button of a page whose server is gone. The README's command runs
+them alone after the rest of the suite (marker ``live_demo``): a second pytest-xdist
+worker's load froze the demo's vehicles mid-test. On several workers the file stays
+on one of them, in this order (its ``xdist_group``, with ``--dist loadgroup``).
+Screenshots go to the pytest temporary
 directory (the path is printed; ``-s`` shows it).
 """
 
@@ -42,8 +44,9 @@ from web import palette
 from web._browser_script import ABORT_ANSWERS, RECONNECT_AFTER_S, STALE_AFTER_S
 from web.wireviewer import SceneRecord
 
-# One worker runs the whole file in order: the tests share one demo, and the last ones stop it.
-pytestmark = pytest.mark.xdist_group("browser")
+# One process runs the whole file in order: the tests share one demo, and the last ones stop
+# it; the README runs them alone (live_demo), since the demo flies on the wall clock.
+pytestmark = [pytest.mark.xdist_group("browser"), pytest.mark.live_demo]
 
 CHROMIUM = Path("/usr/bin/chromium")
 VEHICLES = "/team/vehicles"
