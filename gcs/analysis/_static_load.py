@@ -233,7 +233,7 @@ def _elastic_point(anchors: np.ndarray, lengths: np.ndarray, weight: float, stif
         on = stretch > 0.0
         u = d[on] / dist[on, None]
         grad = stiffness * (stretch[on, None] * u).sum(axis=0) - weight * _DOWN
-        if float(np.linalg.norm(grad)) <= 1e-12 * weight:
+        if float(np.linalg.norm(grad)) <= 1e-9 * weight:  # the point within ~1e-11 m
             break
         ratio = stretch[on] / dist[on]
         hess = stiffness * (u.T @ (u * (1.0 - ratio[:, None])) + ratio.sum() * np.eye(3))
@@ -242,6 +242,8 @@ def _elastic_point(anchors: np.ndarray, lengths: np.ndarray, weight: float, stif
         while t > 1e-12 and energy(p - t * step) > e0 - 1e-4 * t * float(grad @ step):
             t *= 0.5
         p = p - t * step
+        if t * float(np.linalg.norm(step)) < 1e-13:  # no progress left but rounding's
+            break
     return p
 
 
