@@ -196,14 +196,17 @@ def test_insecure_is_explicit_and_said() -> None:
         anyone = mavutil.mavlink_connection(f"udpout:127.0.0.1:{base}", source_system=77,
                                             source_component=190)
         try:
-            ack = None
+            located = None  # a vehicle without a position refuses to arm, as PX4 does
             deadline = time.monotonic() + 10.0
-            while ack is None and time.monotonic() < deadline:
+            while located is None and time.monotonic() < deadline:
                 anyone.mav.heartbeat_send(mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID,
                                           0, 0, 0)
-                anyone.mav.command_long_send(1, 1, mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 0,
-                                             1, 0, 0, 0, 0, 0, 0)
-                ack = anyone.recv_match(type="COMMAND_ACK", blocking=True, timeout=0.5)
+                located = anyone.recv_match(type="LOCAL_POSITION_NED", blocking=True,
+                                            timeout=0.5)
+            assert located is not None, "vehicle 1 never reported a position"
+            anyone.mav.command_long_send(1, 1, mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 0,
+                                         1, 0, 0, 0, 0, 0, 0)
+            ack = anyone.recv_match(type="COMMAND_ACK", blocking=True, timeout=5.0)
             assert ack is not None and ack.result == mavlink.MAV_RESULT_ACCEPTED
         finally:
             anyone.close()

@@ -301,7 +301,8 @@ link = Link(a["sysid"], ZenohTransport.for_gcs(session, fleet=a["fleet"], sysid=
             gcs_system_id=a["gcs_id"], signing_key=ensure_team_key(default_team_key_path())[0],
             command_timeout_s=1.0, command_retries=1, timesync_period_s=0.0).start()
 try:
-    link.wait_for(lambda t: t.heartbeat is not None, timeout_s=a["wait_s"], what="a HEARTBEAT")
+    link.wait_for(lambda t: t.heartbeat is not None and t.position is not None,  # can arm
+                  timeout_s=a["wait_s"], what="a HEARTBEAT and a position")
 except LinkError:
     pass
 try:
@@ -375,8 +376,9 @@ def test_across_three_hosts_only_the_team_reads_and_only_its_gcs_commands(
             connect=(f"tcp/{sim_host.address}:{port}",), tls=TlsSettings(dir=str(certs))))
         with LinkManager(TEAM.config.vehicle_links(), settings=settings,
                          base_dir=tmp_path) as manager:
-            manager.links[1].wait_for(lambda t: t.heartbeat is not None, timeout_s=20.0,
-                                      what="a HEARTBEAT over TLS")
+            manager.links[1].wait_for(  # a position too: a vehicle without one refuses to arm
+                lambda t: t.heartbeat is not None and t.position is not None, timeout_s=20.0,
+                what="a HEARTBEAT and a position over TLS")
             over_tls = f"tls/{sim_side}:{port}"
             # name: (certificates, role, its own CA's, endpoints, vehicle, wait for a HEARTBEAT)
             # (the team's peers go on once they hear one; a session is up well within 5 s)
