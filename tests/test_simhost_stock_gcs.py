@@ -174,7 +174,9 @@ def test_set_gps_global_origin_rebases_a_vehicle_onto_the_team_origin(base_port:
     try:
         # Once located: a vehicle reports its own origin when its first position comes, and
         # that report must not be taken for the answer.
-        located = receive(conn, "LOCAL_POSITION_NED", timeout=10.0)
+        first = receive(conn, "LOCAL_POSITION_NED", timeout=10.0)
+        located = receive(conn, "LOCAL_POSITION_NED",  # strictly after that report
+                          lambda m: m.time_boot_ms > first.time_boot_ms)
         conn.mav.set_gps_global_origin_send(4, round(team.lat_deg * 1e7),
                                             round(team.lon_deg * 1e7), round(team.alt_m * 1e3))
         origin = receive(conn, "GPS_GLOBAL_ORIGIN",
