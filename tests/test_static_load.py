@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +21,7 @@ import yaml
 from gcs.analysis import analyze, even_rope_lengths, static_load
 from gcs.analysis._static_load import NoHangingPointError, accelerating_load
 from gcs.analysis._team_load import accelerating_share, worst_load
-from gcs.analysis._worst_case import flown_scale_max
+from gcs.analysis._worst_case import _accel_keeping_share, flown_scale_max
 from gcs.common import ConfigError
 from gcs.config import Team, load_team
 from sim import (
@@ -393,6 +394,28 @@ def test_the_share_accelerating_is_the_simulators(path: str) -> None:
     assert measured == pytest.approx(np.array(worst_share_at(team, a)), abs=0.03)
     assert worst.share - 0.02 <= measured.max() <= worst.share + 0.01
     assert worst.share > max(analyze(team).load.share) + 0.025  # the acceleration matters
+
+
+@pytest.mark.parametrize("path, limit", [("configs/bebop_square.yaml", 1.334),
+                                         (str(DATA / "bebop_pentagon.yaml"), 0.937)])
+def test_the_acceleration_limit_named_keeps_the_design_share(path: str, limit: float) -> None:
+    """Where accelerating at ``limits.accel_norm`` loads a vehicle beyond the design share,
+    the limit the warning names keeps it within, and is the largest that does (to 1/1000
+    of the configured limit, then floored to three digits)."""
+    team = load_team(path)
+    a = analyze(team)
+    [warning] = [w for w in a.warnings if "limits.accel_norm at most" in w]
+    named = float(re.search(r"limits.accel_norm at most ([0-9.]+)", warning).group(1))
+    assert named == pytest.approx(limit, abs=0.002)
+    assert a.load.accel_share > a.load.design_share
+    assert accelerating_share(team, named).share <= a.load.design_share
+    beyond = named + 0.002 * team.config.limits.accel_norm
+    assert accelerating_share(team, beyond).share > a.load.design_share
+    # from a guess too high (the share's linear estimate is near exact on these teams)
+    accel = team.config.limits.accel_norm
+    searched = _accel_keeping_share(team, a.load.design_share, accel, accel)
+    assert accelerating_share(team, searched).share <= a.load.design_share
+    assert searched == pytest.approx(named, abs=0.002 * accel)
 
 
 def worst_share_at(team: Team, accel_xy: np.ndarray) -> np.ndarray:

@@ -406,13 +406,18 @@ def flown_scale_max(team: Team, safe_span: float) -> float:
     return guidance.scale_max if safe >= guidance.scale_max else max(1.0, 0.96 * safe)
 
 
-def _worst_flown_load(team: Team, safe_span: float) -> WorstLoad:
-    """The worst load within ``analysis.position_error`` over the shapes the team flies
-    carrying the payload: the desired shape and the largest scale (its ropes lean most);
-    the largest share, tension and pull of the two."""
+def flown_scales(team: Team, safe_span: float) -> tuple[float, ...]:
+    """The scales whose loads bound every shape the team flies with the payload: the desired
+    shape and the largest scale flown (its ropes lean most)."""
+    return tuple(sorted({1.0, flown_scale_max(team, safe_span)}))
+
+
+def _worst_flown_load(team: Team, scales: tuple[float, ...]) -> WorstLoad:
+    """The worst load within ``analysis.position_error`` over the shapes of ``scales``: the
+    largest share, tension and pull of them."""
     cfg = team.config.analysis
     worst = [worst_load(team, cfg.position_error, stiffness=cfg.hold_stiffness, scale=s)
-             for s in sorted({1.0, flown_scale_max(team, safe_span)})]
+             for s in scales]
     top = max(worst, key=lambda w: w.share)
     return dataclasses.replace(top, tension=max(w.tension for w in worst),
                                horizontal=max(w.horizontal for w in worst),
@@ -520,14 +525,34 @@ def _load_warnings(team: Team, ld: StaticShares) -> list[str]:
     return out
 
 
+def _accel_keeping_share(team: Team, share: float, accel: float, guess: float) -> float:
+    """The largest acceleration up to ``guess`` (the share's linear estimate) that loads no
+    vehicle beyond ``share`` at the desired shape, to 1/1000 of ``accel``; 0 where even a
+    tenth of ``accel`` does (then no acceleration limit is worth naming)."""
+    def keeps(a: float) -> bool:
+        return accelerating_share(team, a).share <= share
+
+    if guess <= 0.0:  # already beyond the share at rest
+        return 0.0
+    if keeps(guess):
+        return guess
+    low, high = 0.1 * accel, guess
+    if not keeps(low):
+        return 0.0
+    while high - low > 1e-3 * accel:  # bisection: the share grows with the acceleration
+        mid = 0.5 * (low + high)
+        low, high = (mid, high) if keeps(mid) else (low, mid)
+    return low
+
+
 def _accel_warning(team: Team, ld: StaticShares) -> str:
     """The payload accelerating at the guidance's limit loads a vehicle beyond the design
     share: by how much, and the acceleration limit that keeps it within."""
     cfg = team.config
     rest = max(ld.share)
-    fix = ld.accel * (ld.design_share - rest) / max(ld.accel_share - rest, 1e-12)
-    while fix > 0.0 and accelerating_share(team, fix).share > ld.design_share:  # at scale 1
-        fix *= 0.98  # the share grows nearly in proportion to the acceleration
+    fix = _accel_keeping_share(team, ld.design_share, ld.accel,
+                               ld.accel * (ld.design_share - rest) / max(ld.accel_share - rest,
+                                                                         1e-12))
     load = (cfg.airframe.mass + cfg.payload.mass * ld.accel_share) * cfg.analysis.gravity
     over = (f", above the reference thrust {_n(cfg.airframe.thrust_reference, 2)} N"
             if load >= cfg.airframe.thrust_reference else "")
@@ -592,8 +617,8 @@ def analyze(team: Team) -> Analysis:
 
     chain = _chain(team, M, design)
     if ld is not None:
-        worst = _worst_flown_load(team, chain.safe_span)
-        flown = tuple(sorted({1.0, flown_scale_max(team, chain.safe_span)}))
+        flown = flown_scales(team, chain.safe_span)
+        worst = _worst_flown_load(team, flown)
         accelerating = accelerating_share(team, cfg.limits.accel_norm, flown)
         ld = dataclasses.replace(
             ld, worst_share=worst.share, worst_vehicle=f.ids[worst.vehicle],
