@@ -164,6 +164,7 @@ JSON_KEYS: dict[str, object] = {
                     "accel_vehicle": None, "accel_tension_N": None},
     "largest_payload_kg": None,
     "lift": {"altitude_m": None, "ceiling_m": None},
+    "scales_flown": {"min": None, "max": None},
     "violations": None, "warnings": None, "ok": None,
 }
 VIOLATION_KEYS = ["term", "message", "fixes"]

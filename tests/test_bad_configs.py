@@ -28,6 +28,7 @@ from gcs.cli import main
 from gcs.common import ConfigError, load_yaml
 from gcs.config import load_team
 from gcs.formation import build_formation, motion_basis
+from gcs.loop import OperatorCommand
 from tests.conftest import SHORT, SQUARE, run_gcs
 from vehicles import BEBOP2, load_airframe
 
@@ -587,6 +588,31 @@ def test_a_pair_flies_the_short_flight_in_lockstep() -> None:
     assert out.returncode == 0, out.stdout[-2000:] + out.stderr[-4000:]
     data = json.loads(out.stdout.splitlines()[-1])
     assert data["completed"] is True, data
+
+
+def test_a_scale_below_the_smallest_certified_is_named_and_held_there(tmp_path: Path) -> None:
+    """Shrunk to the square's guidance.scale_min 0.3, accelerating at its limit would put
+    all of the payload on one vehicle, beyond its full thrust: the analysis raises the
+    smallest scale flown, a scenario asking for less is told the scale flown, and the
+    operator command (the one the GCS flies, from ``safe_guidance``) holds it there."""
+    team = load_team(SQUARE)
+    a = analyze(team)
+    assert team.config.guidance.scale_min == 0.3 and 0.5 < a.scale_min_flown < 0.55
+    assert any(w.startswith(f"the GCS flies scales from {a.scale_min_flown:g}, not "
+                            f"guidance.scale_min 0.3: at 0.3, accelerating at "
+                            f"limits.accel_norm 2.18 m/s^2 puts 1.000 of the payload")
+               for w in a.warnings), a.warnings
+    scenario = tmp_path / "shrink.yaml"
+    scenario.write_text("name: shrink\nsteps:\n  - {action: arm}\n  - {scale: 0.4}\n")
+    (warning,) = gcs_app.check_scenario(load_scenario(scenario), team, str(scenario))
+    assert warning.startswith(f"{scenario}: steps[1].scale: 0.4 is below "
+                              f"{a.scale_min_flown:.4f}")
+    assert warning.endswith(f"the GCS flies {a.scale_min_flown:.4f}")
+    operator = OperatorCommand(team.config.operator, safe_guidance(team, a))
+    assert operator.set_scale(0.3) == a.scale_min_flown
+    assert operator.set_scale(0.9) == 0.9  # the paper flight's shrink is flown
+    json_scales = json.loads(run_gcs("analyze", SQUARE, "--json").stdout)["scales_flown"]
+    assert json_scales == {"min": a.scale_min_flown, "max": pytest.approx(a.scale_max_flown)}
 
 
 def test_a_scale_beyond_the_safe_deformation_is_named_with_the_scale_flown() -> None:

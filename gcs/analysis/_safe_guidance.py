@@ -1,5 +1,6 @@
-"""The guidance config the GCS flies: its largest scale capped at what the analysis'
-safe deformation allows.
+"""The guidance config the GCS flies: its scales within what the analysis certifies (the
+largest inside the safe deformation, the smallest where accelerating loads no vehicle to
+its reference thrust).
 
 Why one place: the GCS caps the scale here in flight, and a scenario or a user that
 asks for more is told the scale that will be flown, from the same function.
@@ -9,15 +10,17 @@ from __future__ import annotations
 
 import dataclasses
 
-from gcs.analysis._worst_case import Analysis, flown_scale_max
+from gcs.analysis._worst_case import Analysis
 from gcs.config import GuidanceConfig, Team
 
 __all__ = ["safe_guidance"]
 
 
 def safe_guidance(team: Team, analysis: Analysis) -> GuidanceConfig:
-    """``team``'s guidance config with ``scale_max`` capped at the safe deformation."""
+    """``team``'s guidance config with ``scale_min`` and ``scale_max`` those flown."""
     guidance = team.config.guidance
-    cap = flown_scale_max(team, analysis.safe_span)
-    return guidance if cap >= guidance.scale_max else dataclasses.replace(guidance,
-                                                                          scale_max=cap)
+    low = max(guidance.scale_min, analysis.scale_min_flown)
+    high = min(guidance.scale_max, analysis.scale_max_flown)
+    if (low, high) == (guidance.scale_min, guidance.scale_max):
+        return guidance
+    return dataclasses.replace(guidance, scale_min=low, scale_max=high)

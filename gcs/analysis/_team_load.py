@@ -194,29 +194,50 @@ _DIRECTIONS = 72
 """Directions of the horizontal acceleration tried (every 5 degrees)."""
 
 
-def accelerating_share(team: Team, accel: float,
-                       scales: tuple[float, ...] = (1.0,)) -> AcceleratingShare:
+def accelerating_share(team: Team, accel: float, scales: tuple[float, ...] = (1.0,),
+                       directions: np.ndarray | None = None) -> AcceleratingShare:
     """The largest share of the payload on one vehicle, and the largest rope tension, with
-    the payload accelerating at ``accel`` m/s^2 in any horizontal direction (stiff ropes,
-    the desired shape times each of ``scales``; a scale whose ropes cannot hang the payload
-    is skipped). The payload's share at rest when ``accel`` is 0."""
+    the payload accelerating at ``accel`` m/s^2 in any horizontal direction (every 5
+    degrees around the worst of every 15, or ``directions``, rad; stiff ropes, the desired
+    shape times each of ``scales``; a scale whose ropes cannot hang the payload is
+    skipped). The payload's share at rest when ``accel`` is 0."""
     mass, g = team.config.payload.mass, team.config.analysis.gravity
     ropes = _ropes(team)
     best = AcceleratingShare(accel, -1.0, 0, 0.0, 0.0)
     tension = 0.0
     for scale in scales:
         anchors = _anchors(scale * np.asarray(team.formation.positions, dtype=np.float64))
-        for psi in np.linspace(0.0, 2.0 * math.pi, _DIRECTIONS if accel > 0.0 else 1,
-                               endpoint=False):
+
+        def held_at(psi: float) -> tuple[float, int, float] | None:
+            """(largest share, its vehicle, largest tension) accelerating towards ``psi``."""
             a = accel * np.array([math.cos(psi), math.sin(psi), 0.0])
             try:
-                held = accelerating_load(anchors, ropes, mass, g, a)
+                held = accelerating_load(anchors, ropes, mass, g, a)  # noqa: B023
             except ValueError:  # the ropes cannot reach one point at this scale
+                return None
+            return float(held.share.max()), int(np.argmax(held.share)), float(held.tension.max())
+
+        if accel <= 0.0:
+            tried = np.zeros(1)
+        elif directions is not None:
+            tried = np.asarray(directions, dtype=np.float64)
+        else:
+            tried = np.linspace(0.0, 2.0 * math.pi, _DIRECTIONS // 3, endpoint=False)
+        found = {float(psi): held_at(float(psi)) for psi in tried}
+        coarse = {psi: h for psi, h in found.items() if h is not None}
+        if directions is None and accel > 0.0 and coarse:
+            tops = {max(coarse, key=lambda p: coarse[p][0]),
+                    max(coarse, key=lambda p: coarse[p][2])}
+            step = 2.0 * math.pi / _DIRECTIONS
+            for top in tops:  # the every-5-degree directions next to the worst of every 15
+                for k in (-2, -1, 1, 2):
+                    found.setdefault(top + k * step, held_at(top + k * step))
+        for psi, h in found.items():
+            if h is None:
                 continue
-            tension = max(tension, float(held.tension.max()))
-            if float(held.share.max()) > best.share:
-                best = AcceleratingShare(accel, float(held.share.max()),
-                                         int(np.argmax(held.share)), float(psi), 0.0)
+            tension = max(tension, h[2])
+            if h[0] > best.share:
+                best = AcceleratingShare(accel, h[0], h[1], psi % (2.0 * math.pi), 0.0)
     if best.share < 0.0:
         raise NoHangingPointError("the ropes cannot hang the payload at any scale tried")
     return dataclasses.replace(best, tension=tension)

@@ -55,9 +55,11 @@ import dataclasses
 import json
 import math
 from dataclasses import asdict, dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
+from gcs.analysis._static_load import NoHangingPointError
 from gcs.analysis._team_load import (
     WorstLoad,
     accelerating_share,
@@ -200,6 +202,10 @@ class Analysis:
     largest_payload: float
     lift_altitude: float
     lift_ceiling: float
+    scale_min_flown: float
+    """The smallest scale the GCS flies (:func:`flown_scale_min`)."""
+    scale_max_flown: float
+    """The largest scale the GCS flies (:func:`flown_scale_max`)."""
     violations: tuple[Violation, ...] = field(default=())
     warnings: tuple[str, ...] = field(default=())
 
@@ -283,6 +289,8 @@ class Analysis:
             "largest_payload_kg": _num(self.largest_payload),
             "lift": {"altitude_m": _num(self.lift_altitude),
                      "ceiling_m": _num(self.lift_ceiling)},
+            "scales_flown": {"min": _num(self.scale_min_flown),
+                             "max": _num(self.scale_max_flown)},
             "violations": [asdict(v) for v in self.violations],
             "warnings": list(self.warnings),
             "ok": self.ok,
@@ -406,10 +414,76 @@ def flown_scale_max(team: Team, safe_span: float) -> float:
     return guidance.scale_max if safe >= guidance.scale_max else max(1.0, 0.96 * safe)
 
 
-def flown_scales(team: Team, safe_span: float) -> tuple[float, ...]:
-    """The scales whose loads bound every shape the team flies with the payload: the desired
-    shape and the largest scale flown (its ropes lean most)."""
-    return tuple(sorted({1.0, flown_scale_max(team, safe_span)}))
+class SmallestScale(NamedTuple):
+    """The smallest scale flown, and why not smaller."""
+
+    scale: float
+    share_at_scale_min: float
+    """The accelerating share at ``guidance.scale_min`` (inf: the ropes cannot hang it)."""
+
+
+def flown_scale_min(team: Team) -> SmallestScale:
+    """The smallest scale the GCS flies: ``guidance.scale_min`` raised (never above 1) until
+    the payload, accelerating at ``limits.accel_norm``, loads no vehicle up to the reference
+    thrust (85 % of its capacity).
+
+    A shrunk shape hangs the payload from steeper ropes, which let it swing towards the
+    side it accelerates to: the paper's square at half size puts 0.667 of the payload on
+    one vehicle at its acceleration limit (0.386 at scale 1), and at 0.3 all of it, beyond
+    the Bebop's full thrust. The share falls as the scale grows (bisection, to 0.005).
+    """
+    cfg = team.config
+    mass, load_max = cfg.airframe.mass, cfg.airframe.thrust_reference
+    g, payload, accel = cfg.analysis.gravity, cfg.payload.mass, cfg.limits.accel_norm
+
+    def share(scale: float, directions: np.ndarray | None = None) -> float:
+        try:
+            return accelerating_share(team, accel, (scale,), directions).share
+        except NoHangingPointError:
+            return math.inf
+
+    def flown(scale: float, directions: np.ndarray | None = None) -> bool:
+        return (mass + payload * share(scale, directions)) * g < load_max
+
+    low = cfg.guidance.scale_min
+    at_min = share(low)
+    if (mass + payload * at_min) * g < load_max:
+        return SmallestScale(low, at_min)
+    try:  # the worst direction barely turns with the scale: search near it, then check all
+        worst = accelerating_share(team, accel).direction
+    except NoHangingPointError:
+        return SmallestScale(1.0, at_min)
+    near = worst + np.radians(np.arange(-10.0, 10.5, 5.0))
+    high = 1.0
+    if not flown(high, near):
+        return SmallestScale(1.0, at_min)  # the share at scale 1 is the accelerating warning
+    while high - low > 0.005:
+        mid = 0.5 * (low + high)
+        low, high = (low, mid) if flown(mid, near) else (mid, high)
+    smallest = math.ceil(high * 1000.0) / 1000.0
+    while smallest < 1.0 and not flown(smallest):  # another direction is worse there
+        smallest = min(1.0, smallest + 0.005)
+    return SmallestScale(smallest, at_min)
+
+
+def flown_scales(team: Team, safe_span: float, smallest: float) -> tuple[float, ...]:
+    """The scales whose loads bound every shape the team flies with the payload: the
+    smallest flown (its ropes are steepest: the payload swings furthest towards one side),
+    the desired shape, and the largest flown (its ropes lean most)."""
+    return tuple(sorted({smallest, 1.0, flown_scale_max(team, safe_span)}))
+
+
+def _scale_min_warning(team: Team, smallest: SmallestScale) -> str:
+    """``guidance.scale_min`` raised in flight: why, and what flies the configured one."""
+    cfg = team.config
+    low = cfg.guidance.scale_min
+    share = (f"{smallest.share_at_scale_min:.3f}" if math.isfinite(smallest.share_at_scale_min)
+             else "more")
+    return (f"the GCS flies scales from {smallest.scale:g}, not guidance.scale_min {low:g}: "
+            f"at {low:g}, accelerating at limits.accel_norm {cfg.limits.accel_norm:g} m/s^2 "
+            f"puts {share} of the payload on one vehicle, a vertical load up to the "
+            f"reference thrust {_n(cfg.airframe.thrust_reference, 2)} N; guidance.scale_min "
+            f"at least {smallest.scale:g} says so in the config")
 
 
 def _worst_flown_load(team: Team, scales: tuple[float, ...]) -> WorstLoad:
@@ -485,8 +559,9 @@ def _ids(team: Team, mask: tuple[bool, ...]) -> str:
     return ", ".join(str(i) for i, on in zip(team.formation.ids, mask, strict=True) if on)
 
 
-def _load_warnings(team: Team, ld: StaticShares) -> list[str]:
-    """What the geometry says that the paper's fixed share does not."""
+def _load_warnings(team: Team, ld: StaticShares, scales: tuple[float, ...]) -> list[str]:
+    """What the geometry says that the paper's fixed share does not (``scales``: those
+    flown)."""
     out = []
     ids = team.formation.ids
     if ld.even_rope_lengths is not None:
@@ -516,7 +591,7 @@ def _load_warnings(team: Team, ld: StaticShares) -> list[str]:
                    f"{_n(ld.worst_vertical_load, 2)} N{over}, {left}; "
                    f"analysis.payload_share: {need} designs for it")
     if ld.accel_share > ld.design_share + 1e-3:
-        out.append(_accel_warning(team, ld))
+        out.append(_accel_warning(team, ld, scales))
     if not ld.determinate and not team.config.flight.load_sharing:
         out.append(f"flight.load_sharing is off: {sum(ld.taut)} taut ropes split the payload "
                    f"by fractions of a millimetre of the shape (the paper's square flew one "
@@ -525,34 +600,36 @@ def _load_warnings(team: Team, ld: StaticShares) -> list[str]:
     return out
 
 
-def _accel_keeping_share(team: Team, share: float, accel: float, guess: float) -> float:
-    """The largest acceleration up to ``guess`` (the share's linear estimate) that loads no
-    vehicle beyond ``share`` at the desired shape, to 1/1000 of ``accel``; 0 where even a
-    tenth of ``accel`` does (then no acceleration limit is worth naming)."""
-    def keeps(a: float) -> bool:
-        return accelerating_share(team, a).share <= share
+def _accel_keeping_share(team: Team, share: float, accel: float, guess: float,
+                         scales: tuple[float, ...] = (1.0,)) -> float:
+    """The largest acceleration below ``accel`` that loads no vehicle beyond ``share`` at
+    any of ``scales``, to 1/1000 of ``accel``, searched from ``guess`` (the share's linear
+    estimate); 0 where even a tenth of ``accel`` does (then no limit is worth naming)."""
+    def keeps(a: float) -> bool:  # the smallest scale loads one vehicle most
+        return accelerating_share(team, a, (min(scales),)).share <= share
 
     if guess <= 0.0:  # already beyond the share at rest
         return 0.0
     if keeps(guess):
-        return guess
-    low, high = 0.1 * accel, guess
-    if not keeps(low):
-        return 0.0
+        low, high = guess, accel  # ``accel`` itself loads one vehicle beyond it
+    else:
+        low, high = 0.1 * accel, guess
+        if not keeps(low):
+            return 0.0
     while high - low > 1e-3 * accel:  # bisection: the share grows with the acceleration
         mid = 0.5 * (low + high)
         low, high = (mid, high) if keeps(mid) else (low, mid)
     return low
 
 
-def _accel_warning(team: Team, ld: StaticShares) -> str:
+def _accel_warning(team: Team, ld: StaticShares, scales: tuple[float, ...]) -> str:
     """The payload accelerating at the guidance's limit loads a vehicle beyond the design
     share: by how much, and the acceleration limit that keeps it within."""
     cfg = team.config
     rest = max(ld.share)
     fix = _accel_keeping_share(team, ld.design_share, ld.accel,
                                ld.accel * (ld.design_share - rest) / max(ld.accel_share - rest,
-                                                                         1e-12))
+                                                                         1e-12), scales)
     load = (cfg.airframe.mass + cfg.payload.mass * ld.accel_share) * cfg.analysis.gravity
     over = (f", above the reference thrust {_n(cfg.airframe.thrust_reference, 2)} N"
             if load >= cfg.airframe.thrust_reference else "")
@@ -616,18 +693,23 @@ def analyze(team: Team) -> Analysis:
     lhs = sum(terms.values())
 
     chain = _chain(team, M, design)
+    smallest = cfg.guidance.scale_min
     if ld is not None:
-        flown = flown_scales(team, chain.safe_span)
+        floor = flown_scale_min(team)
+        smallest = floor.scale
+        if smallest > cfg.guidance.scale_min:
+            warnings.append(_scale_min_warning(team, floor))
+        flown = flown_scales(team, chain.safe_span, smallest)
         worst = _worst_flown_load(team, flown)
         accelerating = accelerating_share(team, cfg.limits.accel_norm, flown)
-        ld = dataclasses.replace(
+        ld = dataclasses.replace(  # the accel limit named in a warning keeps every scale flown
             ld, worst_share=worst.share, worst_vehicle=f.ids[worst.vehicle],
             position_error=worst.error, worst_tension=worst.tension,
             worst_horizontal=worst.horizontal,
             worst_vertical_load=(m + M * worst.share) * g,
             accel=accelerating.accel, accel_share=accelerating.share,
             accel_vehicle=f.ids[accelerating.vehicle], accel_tension=accelerating.tension)
-        warnings += _load_warnings(team, ld)
+        warnings += _load_warnings(team, ld, flown)
     worst_share = ld.worst_share if ld is not None else design
     heaviest = largest_payload(team, design, lhs, worst_share)
     lighter = {"payload.mass": heaviest} if 0.0 < heaviest < M else {}
@@ -727,6 +809,7 @@ def analyze(team: Team) -> Analysis:
         safe_span=safe_span, safe_deformation=safe_margin,
         load=ld if ld is not None else _no_shares(lengths, assumed),
         largest_payload=heaviest, lift_altitude=lift_altitude, lift_ceiling=ceiling,
+        scale_min_flown=smallest, scale_max_flown=flown_scale_max(team, safe_span),
         violations=tuple(violations), warnings=tuple(warnings),
     )
 

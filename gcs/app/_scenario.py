@@ -138,11 +138,12 @@ def check_scenario(scenario: Scenario, team: Team, source: str, *,
     ``scale_steps`` from 1) or an altitude outside
     ``operator.altitude_min..altitude_max`` raises ConfigError naming ``source`` and
     the step; in flight the operator command would clip it silently. A scale within
-    the config but beyond what the analysis' safe deformation allows (the GCS caps it
-    there: :func:`gcs.analysis.safe_guidance`) is a warning naming the scale flown.
+    the config but outside what the analysis certifies (the GCS holds it there:
+    :func:`gcs.analysis.safe_guidance`) is a warning naming the scale flown.
     """
     g, op = team.config.guidance, team.config.operator
-    safe_max = safe_guidance(team, analysis or analyze(team)).scale_max
+    flown = safe_guidance(team, analysis or analyze(team))
+    safe_min, safe_max = flown.scale_min, flown.scale_max
     warnings: list[str] = []
     scale = 1.0
     for k, step in enumerate(scenario.steps):
@@ -166,6 +167,11 @@ def check_scenario(scenario: Scenario, team: Team, source: str, *,
                 warnings.append(f"{source}: {at}: {what} is above {safe_max:.4f}, the largest "
                                 f"scale the analysis' safe deformation allows for "
                                 f"{team.source}; the GCS flies {safe_max:.4f}")
+            if scale < safe_min - 1e-9:
+                warnings.append(f"{source}: {at}: {what} is below {safe_min:.4f}, the smallest "
+                                f"scale at which the analysis' accelerating payload loads no "
+                                f"vehicle to its reference thrust for {team.source}; the GCS "
+                                f"flies {safe_min:.4f}")
         elif step.altitude is not None:
             if step.altitude < op.altitude_min:
                 raise ConfigError(source, f"{where}.altitude", f"{step.altitude:g} m is below "
