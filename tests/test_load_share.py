@@ -215,7 +215,8 @@ def test_the_analysis_says_the_design_share_needs_load_sharing() -> None:
     square = load_team(SQUARE)
     said = [w for w in analyze(_with_flight(square, load_sharing=False)).warnings
             if "flight.load_sharing is off" in w]
-    assert len(said) == 1 and "only the worst share 0.524 holds" in said[0], said
+    # at its smallest scale flown, 0.527 (0.524 at scale 1)
+    assert len(said) == 1 and "only the worst share 0.569 holds" in said[0], said
     assert not any("load_sharing" in w for w in analyze(square).warnings)
     # three ropes: the split is the balance's own, with or without load sharing
     triangle = _with_flight(load_team(TRIANGLE), load_sharing=False)

@@ -363,6 +363,24 @@ def test_the_ropes_of_an_accelerating_payload_hold_m_g_minus_a(
         assert int(np.argmax(held.share)) == front and held.share[front] > 0.25
 
 
+@pytest.mark.parametrize("path", TEAMS)
+def test_the_worst_direction_found_from_every_15_degrees_is_the_worst_of_every_5(
+        path: str) -> None:
+    """The accelerating share tries every 15 degrees, then every 5 around the worst: the
+    same share and tension as all 72 directions, at the scales the analysis takes."""
+    team = load_team(path)
+    every_5 = np.linspace(0.0, 2.0 * math.pi, 72, endpoint=False)
+    accel = team.config.limits.accel_norm
+    for scale in (0.3, 0.5, 0.7, 1.0, 1.05):
+        try:
+            full = accelerating_share(team, accel, (scale,), every_5)
+        except NoHangingPointError:
+            continue
+        found = accelerating_share(team, accel, (scale,))
+        assert found.share == pytest.approx(full.share, abs=1e-12), scale
+        assert found.tension == pytest.approx(full.tension, abs=1e-12), scale
+
+
 def fly_accelerating(team: Team, accel_xy: np.ndarray, scale: float,
                      steps: int) -> np.ndarray:
     """Each vehicle's share of the payload (rows: every 1/32 s) with the team at ``scale``

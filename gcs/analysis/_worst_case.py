@@ -477,13 +477,15 @@ def _scale_min_warning(team: Team, smallest: SmallestScale) -> str:
     """``guidance.scale_min`` raised in flight: why, and what flies the configured one."""
     cfg = team.config
     low = cfg.guidance.scale_min
-    share = (f"{smallest.share_at_scale_min:.3f}" if math.isfinite(smallest.share_at_scale_min)
-             else "more")
+    share = smallest.share_at_scale_min
+    load = (cfg.airframe.mass + cfg.payload.mass * share) * cfg.analysis.gravity
+    what = (f"accelerating at limits.accel_norm {cfg.limits.accel_norm:g} m/s^2 puts "
+            f"{share:.3f} of the payload on one vehicle: a vertical load of {_n(load, 2)} N "
+            f"not below the reference thrust {_n(cfg.airframe.thrust_reference, 2)} N (85 % "
+            f"of full thrust)" if math.isfinite(share) else "the ropes cannot hang the payload")
     return (f"the GCS flies scales from {smallest.scale:g}, not guidance.scale_min {low:g}: "
-            f"at {low:g}, accelerating at limits.accel_norm {cfg.limits.accel_norm:g} m/s^2 "
-            f"puts {share} of the payload on one vehicle, a vertical load up to the "
-            f"reference thrust {_n(cfg.airframe.thrust_reference, 2)} N; guidance.scale_min "
-            f"at least {smallest.scale:g} says so in the config")
+            f"at {low:g}, {what}; guidance.scale_min at least {smallest.scale:g} says so in "
+            f"the config")
 
 
 def _worst_flown_load(team: Team, scales: tuple[float, ...]) -> WorstLoad:
@@ -932,6 +934,8 @@ def format_report(a: Analysis, source: str) -> str:
          val(a.max_accel_axis, "m/s^2")),
         ("largest safe distance between opposite vehicles", val(a.safe_span, "m")),
         ("maximum safe deformation (beyond the nominal shape)", val(a.safe_deformation, "m")),
+        ("scales of the shape the GCS flies",
+         f"{a.scale_min_flown:.3f} to {a.scale_max_flown:.3f}"),
         ("largest payload the team can carry", val(a.largest_payload, "kg")),
         (f"lift altitude (ceiling {a.lift_ceiling:.3f} m)", val(a.lift_altitude, "m")),
     ]

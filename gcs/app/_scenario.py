@@ -23,17 +23,17 @@ the team's ranges is refused, not clipped in flight.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 from gcs.analysis import Analysis, analyze, safe_guidance
 from gcs.common import ConfigError, FieldError, field, from_mapping, load_yaml
-from gcs.config import Team
+from gcs.config import GuidanceConfig, Team
 from gcs.loop import Action, Clock, Phase, Runtime
 
 __all__ = ["Scenario", "ScenarioError", "Step", "Sticks", "check_scenario", "load_scenario",
-           "play", "play_step"]
+           "play", "play_step", "scenario_scales"]
 
 LONGEST_S = 3600.0
 """Longest wait, stick hold or timeout of one step, s: a scenario is a test flight."""
@@ -129,6 +129,27 @@ def load_scenario(path: str | Path) -> Scenario:
     return from_mapping(Scenario, raw, str(path))
 
 
+def _scales_asked(scenario: Scenario, scale_step: float) -> Iterator[tuple[int, float]]:
+    """(step index, the scale it asks) for each step that sets the scale, from 1."""
+    scale = 1.0
+    for k, step in enumerate(scenario.steps):
+        if step.scale is not None:
+            scale = step.scale
+        elif step.scale_steps is not None:
+            scale = round(scale + step.scale_steps * scale_step, 6)
+        else:
+            continue
+        yield k, scale
+
+
+def scenario_scales(scenario: Scenario, guidance: GuidanceConfig) -> tuple[float, ...]:
+    """The smallest and largest scales ``scenario`` flies with ``guidance`` (the one flown:
+    :func:`gcs.analysis.safe_guidance`), and 1, sorted."""
+    asked = [scale for _, scale in _scales_asked(scenario, guidance.scale_step)]
+    held = [min(max(scale, guidance.scale_min), guidance.scale_max) for scale in asked]
+    return tuple(sorted({1.0, min(held), max(held)} if held else {1.0}))
+
+
 def check_scenario(scenario: Scenario, team: Team, source: str, *,
                    analysis: Analysis | None = None) -> list[str]:
     """Refuse a scenario that asks ``team`` for what its config does not allow; returns
@@ -145,16 +166,12 @@ def check_scenario(scenario: Scenario, team: Team, source: str, *,
     flown = safe_guidance(team, analysis or analyze(team))
     safe_min, safe_max = flown.scale_min, flown.scale_max
     warnings: list[str] = []
-    scale = 1.0
+    scales = dict(_scales_asked(scenario, g.scale_step))
     for k, step in enumerate(scenario.steps):
         where = f"steps[{k}]"
-        if step.scale is not None or step.scale_steps is not None:
+        if k in scales:
             given = step.scale is not None
-            if step.scale is not None:
-                scale = step.scale
-            else:
-                assert step.scale_steps is not None
-                scale = round(scale + step.scale_steps * g.scale_step, 6)
+            scale = scales[k]
             what = f"{scale:g}" if given else f"takes the scale to {scale:g}, which"
             at = f"{where}.scale" if given else f"{where}.scale_steps"
             if scale < g.scale_min - 1e-9:

@@ -40,8 +40,8 @@ from pathlib import Path
 
 import numpy as np
 
-from gcs.analysis import Analysis
-from gcs.app._scenario import Scenario, load_scenario
+from gcs.analysis import Analysis, accelerating_share, safe_guidance
+from gcs.app._scenario import Scenario, load_scenario, scenario_scales
 from gcs.app._seeds import fly_seed, fly_seeds_in_parallel, jobs_for, seed_record, seeds_text
 from gcs.config import Team
 from gcs.flightlog import FlightLog, tilt_angle
@@ -68,11 +68,12 @@ class Figure:
 
 #: The rows of the table, in order.
 FIGURES = (
-    Figure("share_design", "vertical load share <= design share (or accelerating)", "share", ""),
+    Figure("share_design", "vertical load share <= design share (or accelerating, at the "
+           "scales flown)", "share", ""),
     Figure("share_worst", "vertical load share <= worst share within position_error",
            "share", ""),
-    Figure("tension_design", "rope tension <= tension at the design share (or accelerating)",
-           "tension", "N"),
+    Figure("tension_design", "rope tension <= tension at the design share (or accelerating, "
+           "at the scales flown)", "tension", "N"),
     Figure("tension_worst", "rope tension <= worst tension", "tension", "N"),
     Figure("pull_safe", "horizontal rope pull <= eq. Th at the safe span", "pull", "N"),
     Figure("tilt_bank", "tilt <= bank limit", "tilt", "rad"),
@@ -83,16 +84,27 @@ FIGURES = (
 )
 
 
-def predictions(analysis: Analysis, team: Team) -> dict[str, float]:
-    """The analysis' bound behind each figure (:data:`FIGURES`' keys), SI units."""
+def predictions(analysis: Analysis, team: Team,
+                scales: tuple[float, ...] | None = None) -> dict[str, float]:
+    """The analysis' bound behind each figure (:data:`FIGURES`' keys), SI units.
+
+    The accelerating share and tension are taken at ``scales``, those a scenario flies
+    (None: every scale the GCS flies, the certificate's): the paper flight's 0.9 to 1.1
+    hold the square to 0.41 of the payload, not the 0.63 of its smallest scale flown, so
+    a model that is wrong where the flight went still shows.
+    """
     cfg = team.config
     ld = analysis.load
     weight = cfg.payload.mass * analysis.gravity
+    accel_share, accel_tension = ld.accel_share, ld.accel_tension
+    if scales is not None and math.isfinite(accel_share):
+        flown = accelerating_share(team, cfg.limits.accel_norm, scales)
+        accel_share, accel_tension = flown.share, flown.tension
     return {
-        "share_design": max(ld.design_share, ld.accel_share),
+        "share_design": max(ld.design_share, accel_share),
         "share_worst": ld.worst_share,
         "tension_design": max(ld.design_share * weight / math.cos(analysis.equilibrium_rope_angle),
-                              ld.accel_tension),
+                              accel_tension),
         "tension_worst": ld.worst_tension,
         "pull_safe": analysis.horizontal_force - cfg.airframe.mass * cfg.limits.accel_norm,
         "tilt_bank": analysis.bank_limit,
@@ -325,8 +337,10 @@ def verify(team: Team, scenario: str | Path, analysis: Analysis, *,
     """
     jobs = jobs_for(jobs, len(seeds))
     wall0 = time.monotonic()
+    script = load_scenario(scenario)
+    scales = scenario_scales(script, safe_guidance(team, analysis))
     with tempfile.TemporaryDirectory(prefix="gcs-verify-") as tmp:
-        work = functools.partial(_fly_and_measure, team, load_scenario(scenario),
+        work = functools.partial(_fly_and_measure, team, script,
                                  str(Path(tmp) / "flight.tlog"), flight_progress, gusts)
         flights = fly_seeds_in_parallel(
             team, work, seeds, jobs=jobs, say=progress, error_of=lambda f: f.error,
@@ -335,5 +349,5 @@ def verify(team: Team, scenario: str | Path, analysis: Analysis, *,
     name = Path(scenario).stem
     return VerifyResult(team=team.config.name, scenario=name, seeds=tuple(seeds), jobs=jobs,
                         wall_s=time.monotonic() - wall0, flights=tuple(flights),
-                        rows=tuple(compare(predictions(analysis, team), flights)),
+                        rows=tuple(compare(predictions(analysis, team, scales), flights)),
                         gusts=gusts or 0.0)
