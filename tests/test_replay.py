@@ -84,10 +84,16 @@ class PageViewer(WireViewer):
                 out.update(str(x) for x in w.get("options") or ())  # type: ignore[attr-defined]
         return out
 
-    def uuid(self, label: str) -> str:
-        """The id of the element labelled ``label`` (exactly one must exist)."""
-        with self._lock:
-            (found,) = [u for u, w in self.widgets.items() if w.get("label") == label]
+    def uuid(self, label: str, timeout: float = 30.0) -> str:
+        """The id of the element labelled ``label`` (exactly one must exist), once the page
+        has sent it: a page built on a busy machine sends its controls after the viewer
+        connected."""
+        def labelled() -> list[str]:
+            with self._lock:
+                return [u for u, w in self.widgets.items() if w.get("label") == label]
+
+        self.until(lambda: bool(labelled()), timeout)
+        (found,) = labelled()
         return found
 
     def click(self, label: str) -> None:
