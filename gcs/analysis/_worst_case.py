@@ -466,13 +466,6 @@ def flown_scale_min(team: Team) -> SmallestScale:
     return SmallestScale(smallest, at_min)
 
 
-def flown_scales(team: Team, safe_span: float, smallest: float) -> tuple[float, ...]:
-    """The scales whose loads bound every shape the team flies with the payload: the
-    smallest flown (its ropes are steepest: the payload swings furthest towards one side),
-    the desired shape, and the largest flown (its ropes lean most)."""
-    return tuple(sorted({smallest, 1.0, flown_scale_max(team, safe_span)}))
-
-
 def _scale_min_warning(team: Team, smallest: SmallestScale) -> str:
     """``guidance.scale_min`` raised in flight: why, and what flies the configured one."""
     cfg = team.config
@@ -695,13 +688,15 @@ def analyze(team: Team) -> Analysis:
     lhs = sum(terms.values())
 
     chain = _chain(team, M, design)
-    smallest = cfg.guidance.scale_min
+    smallest, largest = cfg.guidance.scale_min, flown_scale_max(team, chain.safe_span)
     if ld is not None:
         floor = flown_scale_min(team)
         smallest = floor.scale
         if smallest > cfg.guidance.scale_min:
             warnings.append(_scale_min_warning(team, floor))
-        flown = flown_scales(team, chain.safe_span, smallest)
+        # the smallest scale flown (steepest ropes), the desired shape, the largest (they
+        # lean most): their loads bound every shape flown with the payload
+        flown = tuple(sorted({smallest, 1.0, largest}))
         worst = _worst_flown_load(team, flown)
         accelerating = accelerating_share(team, cfg.limits.accel_norm, flown)
         ld = dataclasses.replace(  # the accel limit named in a warning keeps every scale flown
@@ -811,7 +806,7 @@ def analyze(team: Team) -> Analysis:
         safe_span=safe_span, safe_deformation=safe_margin,
         load=ld if ld is not None else _no_shares(lengths, assumed),
         largest_payload=heaviest, lift_altitude=lift_altitude, lift_ceiling=ceiling,
-        scale_min_flown=smallest, scale_max_flown=flown_scale_max(team, safe_span),
+        scale_min_flown=smallest, scale_max_flown=largest,
         violations=tuple(violations), warnings=tuple(warnings),
     )
 
