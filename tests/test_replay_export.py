@@ -84,19 +84,32 @@ def recorded_vehicles(messages: list[tuple[float, dict[str, Any]]], at: float) -
     return np.asarray(positions, dtype=float).reshape(-1, 3)
 
 
-def live_replay(log: Path, at: float) -> np.ndarray:
-    """The vehicles' positions that ``gcs replay``'s page sends a viewer at log time ``at``."""
+def scene_positions(viewer: WireViewer, expect: np.ndarray, timeout: float = 10.0) -> np.ndarray:
+    """The vehicles' positions the viewer has: once they are ``expect`` (the node arrives
+    created, then updated, in windows a busy machine may space out), or as they stand after
+    ``timeout`` s."""
+    deadline = time.monotonic() + timeout
+    while True:
+        shown = np.asarray(viewer.wait_for(SCENE)["batched_positions"],
+                           dtype=float).reshape(-1, 3)
+        if np.allclose(shown, expect, atol=1e-6) or time.monotonic() > deadline:
+            return shown
+        time.sleep(0.05)
+
+
+def live_replay(log: Path, at: float, expect: np.ndarray) -> np.ndarray:
+    """The vehicles' positions that ``gcs replay``'s page sends a viewer at log time ``at``
+    (:func:`scene_positions`)."""
     ui = ReplayUi(FlightLog.load(log), port=free_tcp_port())
     try:
         ui.seek(at)
         viewer = WireViewer(ui.server.get_port())
         try:
-            node = viewer.wait_for(SCENE)
+            return scene_positions(viewer, expect)
         finally:
             viewer.close()
     finally:
         ui.close()
-    return np.asarray(node["batched_positions"], dtype=float).reshape(-1, 3)
 
 
 def test_export_is_one_self_contained_file(exported: tuple[Path, Path, str]) -> None:
@@ -202,8 +215,8 @@ def test_exported_page_scrubs_to_the_logged_positions(
     scene = recording(out.read_text(encoding="utf-8"))
     np.testing.assert_allclose(recorded_vehicles(scene, shown), logged, atol=1e-4)
     # ... where the live replay page, at that moment, has them
-    np.testing.assert_allclose(recorded_vehicles(scene, shown), live_replay(log_path, at),
-                               atol=1e-6)
+    recorded = recorded_vehicles(scene, shown)
+    np.testing.assert_allclose(recorded, live_replay(log_path, at, recorded), atol=1e-6)
 
     # ... and drew it: the vehicles' ok green on the 3-D view (the panel folded: its table
     # has green dots), and the view changes when the play head moves on

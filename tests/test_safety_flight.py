@@ -14,6 +14,7 @@ from collections.abc import Iterator
 import pytest
 
 from gcs.app import GcsApp, SimProcess, free_tcp_port
+from gcs.app._fly import CONTROL_ANSWER_S
 from gcs.app._scenario import Scenario, Step, play
 from gcs.config import Team, load_team
 from gcs.loop import Action, Phase
@@ -48,9 +49,16 @@ def flying() -> Iterator[GcsApp]:
 
 
 def break_vehicle(app: GcsApp, action: str, sysid: int) -> None:
+    """Break vehicle ``sysid`` through the simulator's control queryable, which answers once
+    the fault is queued: it then acts at the sim time the test reads next (a put could reach
+    the simulator ticks later on a busy machine, and the test would time the wrong moment)."""
     topic = keys.sim(app.fleet, "control")
-    app.session.put(topic, Sealer(team_key(), topic).seal(
-        f'{{"action": "{action}", "sysid": {sysid}}}'.encode()))
+    sealed = Sealer(team_key(), topic).seal(
+        f'{{"action": "{action}", "sysid": {sysid}}}'.encode())
+    answers = [reply.ok.payload.to_bytes().decode()
+               for reply in app.session.get(topic, payload=sealed, timeout=CONTROL_ANSWER_S)
+               if reply.ok is not None]
+    assert answers == ["queued"], f"{action} {sysid}: the simulator answered {answers}"
 
 
 def sim_sleep(app: GcsApp, seconds: float) -> None:

@@ -219,7 +219,7 @@ def _record(ui: ReplayUi, name: str, rate_hz: float,
     events_at = 0
     for k in range(frames):
         t = start + k / rate_hz
-        ui.draw(t)
+        ui.seek(t)
         recording.insert_sleep(1.0 / rate_hz)
         state = cursor.state(t)
         positions[k] = state.fleet.p_ned

@@ -158,7 +158,7 @@ class ReplayUi:
         self._draw_lock = threading.Lock()  # the UI thread and viewers' callbacks both draw
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, daemon=True, name="replay-ui")
-        self.draw(self.timeline.t)
+        self.draw()
 
     # -- public --------------------------------------------------------------------------
 
@@ -179,7 +179,7 @@ class ReplayUi:
     def seek(self, t: float) -> None:
         """Move the play head to log time ``t`` and draw it now."""
         self.timeline.seek(t)
-        self.draw(self.timeline.t)
+        self.draw()
 
     # -- viewers' cameras ----------------------------------------------------------------
 
@@ -269,10 +269,9 @@ class ReplayUi:
         last = time.monotonic()
         while not self._stop.wait(self._period):
             now = time.monotonic()
-            t = self.timeline.advance(now - last)
+            self.timeline.advance(now - last)
             last = now
-            if t != self._shown_t:
-                self.draw(t)
+            self.draw(only_moved=True)
             self._follow()
 
     def _rebuild(self, t: float) -> None:
@@ -283,10 +282,15 @@ class ReplayUi:
         self._history = History(self.view)
         self._shown_tick = self.cursor.tick(t - self._history.window) - 1
 
-    def draw(self, t: float) -> None:
-        """Draw the recorded state at ``t``: scene every call, status and plots per tick."""
+    def draw(self, *, only_moved: bool = False) -> None:
+        """Draw the recorded state at the play head: scene every call, status and plots per
+        tick. The play head is read under the draw lock, so a seek's drawing is never
+        overwritten by a time this thread read before the seek. ``only_moved``: nothing to
+        do when the play head is where it was last drawn."""
         with self._draw_lock:
-            self._draw(t)
+            t = self.timeline.t
+            if not (only_moved and t == self._shown_t):
+                self._draw(t)
 
     def _draw(self, t: float) -> None:
         last = self._shown_t
