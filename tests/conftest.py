@@ -19,17 +19,22 @@ from gcs.testing import Host, NetnsUnavailableError
 SQUARE = "configs/bebop_square.yaml"
 SHORT = "configs/scenarios/short_flight.yaml"
 
-_CONFIG_HOME = tempfile.mkdtemp(prefix="gcs-tests-config-")
+_CONFIG_HOMES: list[str] = []
 
 
 def pytest_configure(config: pytest.Config) -> None:
     """The suite's own user config directory: its team key (made on first use by the GCS
-    and the simulators the tests start, which inherit it) never touches the user's."""
-    os.environ["XDG_CONFIG_HOME"] = _CONFIG_HOME
+    and the simulators the tests start, which inherit it) never touches the user's. Made
+    here, not on import: a process that imports a test module (a spawned worker) would
+    leave one behind."""
+    home = tempfile.mkdtemp(prefix="gcs-tests-config-")
+    _CONFIG_HOMES.append(home)
+    os.environ["XDG_CONFIG_HOME"] = home
 
 
 def pytest_unconfigure(config: pytest.Config) -> None:
-    shutil.rmtree(_CONFIG_HOME, ignore_errors=True)
+    while _CONFIG_HOMES:
+        shutil.rmtree(_CONFIG_HOMES.pop(), ignore_errors=True)
 
 
 @pytest.fixture

@@ -240,6 +240,30 @@ def test_the_lift_altitude_is_checked_against_the_ceiling(tmp_path: Path) -> Non
         load_team(path)
 
 
+
+def test_ropes_micrometres_from_taut_are_named_to_the_digit_that_differs(
+        tmp_path: Path) -> None:
+    """The hexagon with its corners rounded to the millimetre (0.866 for 0.866025): four
+    corners sit 22 um nearer the centre, their equal ropes are slack, and the lengths the
+    warning names differ from the configured ones in what it prints."""
+    data = yaml.safe_load(Path("configs/bebop_hexagon.yaml").read_text())
+    data["airframe"] = BEBOP2
+    for v in data["vehicles"]:
+        v["position"] = [round(x, 3) for x in v["position"]]
+    path = tmp_path / "rounded.yaml"
+    path.write_text(yaml.safe_dump(data))
+    team = load_team(path)
+    [said] = [w for w in analyze(team).warnings if "are slack" in w]
+    printed = re.search(r"ropes of \[([^\]]+)\] m", said)
+    assert printed, said
+    configured = team.config.payload.lengths(team.formation.n)
+    named = [float(x) for x in printed.group(1).split(", ")]
+    assert named == pytest.approx(list(even_rope_lengths(team)), abs=1e-5)
+    texts = printed.group(1).split(", ")
+    digits = len(texts[0].split(".")[1])
+    assert any(t != f"{c:.{digits}f}" for t, c in zip(texts, configured, strict=True)), said
+
+
 # -- the simulator's hover -------------------------------------------------------------------
 
 

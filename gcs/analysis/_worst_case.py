@@ -554,6 +554,17 @@ def _ids(team: Team, mask: tuple[bool, ...]) -> str:
     return ", ".join(str(i) for i, on in zip(team.formation.ids, mask, strict=True) if on)
 
 
+def _lengths_text(lengths: tuple[float, ...], configured: tuple[float, ...]) -> str:
+    """``lengths`` to the mm, or finer where that would print a length that differs from
+    its configured one as the same (positions rounded to a tenth of a mm leave a ring's
+    ropes micrometres from taut)."""
+    digits = 3
+    while digits < 6 and any(abs(a - b) > 0.5e-6 and f"{a:.{digits}f}" == f"{b:.{digits}f}"
+                             for a, b in zip(lengths, configured, strict=True)):
+        digits += 1
+    return ", ".join(f"{x:.{digits}f}" for x in lengths)
+
+
 def _load_warnings(team: Team, ld: StaticShares, scales: tuple[float, ...]) -> list[str]:
     """What the geometry says that the paper's fixed share does not (``scales``: those
     flown)."""
@@ -563,7 +574,7 @@ def _load_warnings(team: Team, ld: StaticShares, scales: tuple[float, ...]) -> l
         slack = tuple(not t for t in ld.taut)
         carry = ", ".join(f"{i} {s:.3f}" for i, s, t in zip(ids, ld.share, ld.taut, strict=True)
                           if t)
-        lengths = ", ".join(f"{x:.3f}" for x in ld.even_rope_lengths)
+        lengths = _lengths_text(ld.even_rope_lengths, ld.rope_lengths)
         head = (f"at the desired shape the ropes of vehicles {_ids(team, slack)} are slack"
                 if any(slack) else "at the desired shape the payload hangs "
                 f"{math.hypot(*ld.payload_offset):.3f} m off the centroid")
