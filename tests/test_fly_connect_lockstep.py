@@ -8,9 +8,11 @@ import json
 import subprocess
 import time
 
+import numpy as np
 import pytest
 
 from gcs.app import GcsApp, SimProcess, free_tcp_port
+from gcs.app._simjoin import free_pace
 from gcs.common import ConfigError
 from gcs.config import load_team
 from gcs.loop import ClockStoppedError
@@ -97,3 +99,18 @@ def test_of_two_gcss_joining_one_lockstep_simulator_it_follows_the_first_and_sto
         with pytest.raises(ConfigError, match=r"--connect: the simulator at .* is in lockstep "
                                               r"with another GCS already \(at t = "):
             GcsApp(TEAM, zenoh_settings=settings, sim_clock=True, lockstep=None)
+
+
+@pytest.mark.parametrize(("pace", "late_first"), [(1.0, 0.15), (1.0, 0.0), (0.5, 0.15),
+                                                  (1.3, 0.0), (5.0, 0.1)])
+def test_a_simulators_pace_is_read_through_a_slow_links_jitter(pace: float,
+                                                               late_first: float) -> None:
+    """Clock samples every 0.1 s over a link of 0.1 s delay with random extra delays up to
+    0.1 s, the first held back ``late_first`` more (a resend): the pace read is the
+    simulator's within 5 % (the first and last samples alone read 1.3x for real time)."""
+    rng = np.random.default_rng(3)
+    sim = np.arange(0.0, 1.6 * pace, 0.1 * pace)
+    wall = 100.0 + sim / pace + 0.1 + rng.uniform(0.0, 0.1, len(sim))
+    wall[0] += late_first
+    wall = np.maximum.accumulate(wall)  # a stream keeps its order
+    assert free_pace(wall, sim) == pytest.approx(pace, rel=0.05)
