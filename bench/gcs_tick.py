@@ -74,11 +74,14 @@ def ring_team(n: int, folder: Path) -> Path:
     team = {"name": f"ring{n}", "airframe": str(ROOT / "configs/airframes/bebop2.yaml"),
             "vehicles": vehicles, "edges": edges,
             "guidance": {"c1": 0.17, "c2": 0.3, "rate_hz": 4.0, "max_speed": 1.0,
-                         "max_rotation_disagreement": 0.2},
+                         "max_rotation_disagreement": 0.2, "scale_min": 1.0},
             "limits": {"bank_deg": 20.0, "accel_norm": 1.0, "accel_axis": 0.7},
             "payload": {"mass": 0.1, "rope_length": radius * 1.5},
             "analysis": {"max_distance_error": 1.0, "design_rope_angle_deg": 45.0},
-            "safety": {"geofence_xy": 1000.0},
+            # long ropes: the lift (1 m above where they go taut, even shrunk) fits below
+            "operator": {"altitude_max": math.ceil(radius * 1.5) + 3.0},
+            "safety": {"geofence_xy": 1000.0,
+                       "geofence_altitude": math.ceil(radius * 1.5) + 3.0},
             "gcs": {"fleet": f"bench{n}"}}
     path = folder / f"ring{n}.yaml"
     path.write_text(yaml.safe_dump(team))
@@ -95,9 +98,10 @@ def play_vehicles(session, fleet: str, positions: np.ndarray, stop: threading.Ev
     encs = [MavlinkEncoder(system_id=i + 1, component_id=1) for i in range(n)]
     t0 = time.monotonic()
     due = [t0]
-    priority = BackgroundStepping(lambda: time.monotonic() - due[0] > LIFT_LAG_S)
+    priority = BackgroundStepping(lag_s=LIFT_LAG_S)
     if background:
         priority.start()
+    priority.set_due(due[0])
     while not stop.is_set():
         ms = int((time.monotonic() - t0) * 1000)
         for i, (pub, enc) in enumerate(zip(pubs, encs, strict=True)):
@@ -107,6 +111,7 @@ def play_vehicles(session, fleet: str, positions: np.ndarray, stop: threading.Ev
                     + enc.encode(enc.mav.local_position_ned_encode(ms, x, y, -1.5, 0.1, 0.0, 0.0))
                     + enc.encode(enc.mav.attitude_encode(ms, 0.01, 0.02, 0.0, 0.0, 0.0, 0.0)))
         due[0] += _TELEMETRY_PERIOD_S
+        priority.set_due(due[0])
         if due[0] > time.monotonic():
             priority.keeping_up()
         stop.wait(max(0.0, due[0] - time.monotonic()))

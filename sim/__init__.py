@@ -21,6 +21,7 @@ Modules:
                       order.
     ``_layout``       Start layouts of a team around its payload: positions, rope lengths,
                       payload position.
+    ``_lifter``       The watchdog process that lifts a starved background stepping thread.
     ``_options``      Options of one sim host run (the ``python -m sim`` flags, as a typed
                       value).
     ``_pacing``       Pacing of sim time against wall time: N times real time, or as fast as

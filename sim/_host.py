@@ -118,7 +118,6 @@ class SimHost:
         self._gusts: list[tuple[float, np.ndarray]] = []  # (sim time it ends, wind it adds)
         self._controls: list[bytes] = []  # control messages to act on at the next chunk
         self._pacer = Pacer(options.speed)
-        self._due: float | None = None  # wall time the chunk being stepped was due (paced)
         # lockstep: nothing past the first chunk runs before a GCS acks its first tick, so
         # what the GCS sees does not depend on when it connected
         self._acked = -math.inf
@@ -195,7 +194,7 @@ class SimHost:
     def run(self) -> None:
         """Step until :meth:`stop`, or the first chunk boundary at or after the duration; blocks."""
         # A lockstep host is what the GCS waits for at every tick: never in the background.
-        priority = BackgroundStepping(self._behind) \
+        priority = BackgroundStepping(lag_s=LIFT_LAG_S) \
             if self._options.background and not self._options.lockstep else None
         if priority is not None and not priority.start():
             _log.warning("--background: this process may not raise a thread's priority again "
@@ -249,12 +248,6 @@ class SimHost:
         if self._udp is not None:
             self._udp.close()
 
-    def _behind(self) -> bool:
-        """Whether the chunk being stepped is overdue by more than :data:`LIFT_LAG_S` (any
-        thread)."""
-        due = self._due
-        return due is not None and time.monotonic() - due > LIFT_LAG_S
-
     def _wait_until_due(self, target: float, priority: BackgroundStepping | None) -> None:
         """Handle events until ``target`` may be simulated (pacing and lockstep allow it)."""
         while not self._stopping:
@@ -263,7 +256,8 @@ class SimHost:
                     self._fabric.publish_clock(self.t)  # for a GCS that joined late
                 continue
             deadline = self._pacer.deadline(target)
-            self._due = deadline
+            if priority is not None:
+                priority.set_due(deadline)
             wait = 0.0 if deadline is None else deadline - time.monotonic()
             if wait <= 0.0:
                 return

@@ -10,16 +10,18 @@ normal thread is placed there and preempts it at once (a shorter time slice
 or nice 19 did not help; renice was tried).
 
 The price is that a saturated machine gives the thread almost nothing, and a
-starved sim would freeze the team's telemetry. So a watchdog thread at normal
+starved sim would freeze the team's telemetry. So a watchdog at normal
 priority checks often whether the stepping thread has fallen behind its
 wall-time schedule and lifts it to normal priority; the stepping thread goes
 back to the background once it is ahead again and a second has passed
 (:meth:`BackgroundStepping.keeping_up`), since on a machine that stays
 saturated going back at once would starve it again at every chunk. The
-watchdog is Python too and needs the GIL, which the starved loop may hold, so
-with every core saturated a paced host keeps 55-70 % of real time (2-4 %
-without the watchdog, 100 % at normal priority): the reason this is an
-option (``python -m sim --background``) and not the default.
+watchdog is a small process of its own (:mod:`sim._lifter`): a thread would
+need the GIL, which the starved loop may hold, and kept a paced host at
+55-70 % of real time with every core saturated, 38-79 % with twice as many
+hogs as cores. The process keeps it at the pace the same host keeps at
+normal priority (1.00 beside four hogs on two cores). It is still an option
+(``python -m sim --background``), not the default: it costs a process.
 
 Lifting needs the right to raise a thread's priority (root, CAP_SYS_NICE, or
 an RLIMIT_NICE of 20); without it the thread could not come back, so it stays
@@ -29,12 +31,15 @@ at normal priority, as it does where the policy does not exist (not Linux).
 from __future__ import annotations
 
 import math
+import mmap
 import os
+import subprocess
+import sys
+import tempfile
 import threading
 import time
-from collections.abc import Callable
 
-from gcs.common import join_thread
+from sim import _lifter
 
 __all__ = ["STAY_LIFTED_S", "WATCH_PERIOD_S", "BackgroundStepping", "can_lift",
            "set_background"]
@@ -44,6 +49,12 @@ WATCH_PERIOD_S = 0.01
 
 STAY_LIFTED_S = 1.0
 """A lifted stepping thread stays at normal priority at least this long, s."""
+
+_START_TIMEOUT_S = 5.0
+"""Longest wait for the watchdog process to say it watches, s."""
+
+_SHARED_DIR = "/dev/shm"
+"""Where the numbers shared with the watchdog are mapped from (memory, where it exists)."""
 
 _IDLE = getattr(os, "SCHED_IDLE", None)
 _OTHER = getattr(os, "SCHED_OTHER", None)
@@ -82,69 +93,96 @@ def can_lift() -> bool:
 class BackgroundStepping:
     """Background priority for the thread that calls :meth:`start`, lifted while it lags.
 
-    ``behind()`` (called on the watchdog thread) says whether the stepping
-    thread is late against its schedule; it must be cheap and thread-safe.
+    The stepping thread says when the chunk it steps is due (:meth:`set_due`); a
+    watchdog process (:mod:`sim._lifter`) lifts it to normal priority once that is
+    more than ``lag_s`` past, and it goes back to the background from
+    :meth:`keeping_up`.
     """
 
-    def __init__(self, behind: Callable[[], bool], *,
-                 watch_period_s: float = WATCH_PERIOD_S,
+    def __init__(self, *, lag_s: float, watch_period_s: float = WATCH_PERIOD_S,
                  stay_lifted_s: float = STAY_LIFTED_S) -> None:
-        self._behind = behind
+        self._lag = lag_s
         self._period = watch_period_s
         self._stay_lifted = stay_lifted_s
-        self._lifted_at = -math.inf
-        self._lock = threading.Lock()
         self._tid: int | None = None
-        self._background = False
-        self.lifts = 0
-        """How often the watchdog lifted the stepping thread (a starved sim)."""
-        self._stop = threading.Event()
-        self._watchdog: threading.Thread | None = None
+        self._shared: mmap.mmap | None = None
+        self._watchdog: subprocess.Popen[bytes] | None = None
+        self._lifts = 0
 
     @property
     def background(self) -> bool:
         """Whether the stepping thread runs in the background now."""
-        return self._background
+        return self._shared is not None and bool(_lifter.read(self._shared)[_lifter.BACKGROUND])
+
+    @property
+    def lifts(self) -> int:
+        """How often the watchdog lifted the stepping thread (a starved sim)."""
+        if self._shared is not None:
+            self._lifts = int(_lifter.read(self._shared)[_lifter.LIFTS])
+        return self._lifts
 
     def start(self) -> bool:
         """From the stepping thread: go to the background and start watching; False (and
-        nothing changed) where the thread could not be lifted again."""
+        nothing changed) where the thread could not be lifted again or no watchdog
+        started."""
         if not can_lift():
             return False
-        # the watchdog first, so it does not inherit the background policy
-        self._watchdog = threading.Thread(target=self._watch, name="sim-priority", daemon=True)
-        self._tid = threading.get_native_id()
-        self._background = set_background(True)
-        self._watchdog.start()
-        return self._background
+        tid = threading.get_native_id()
+        with tempfile.NamedTemporaryFile(dir=_SHARED_DIR if os.path.isdir(_SHARED_DIR)
+                                         else None, prefix="sim-lifter-") as f:
+            f.write(_lifter.LAYOUT.pack(math.inf, self._lag, self._period, self._stay_lifted,
+                                        -math.inf, 0, 0, 0, 0))
+            f.flush()
+            shared = mmap.mmap(f.fileno(), _lifter.LAYOUT.size)
+            watchdog = subprocess.Popen([sys.executable, "-I", "-S", _lifter.__file__, f.name,
+                                         str(tid)], stdin=subprocess.DEVNULL)
+            deadline = time.monotonic() + _START_TIMEOUT_S
+            while not _lifter.read(shared)[_lifter.READY]:
+                if watchdog.poll() is not None or time.monotonic() > deadline:
+                    watchdog.kill()
+                    watchdog.wait()
+                    shared.close()
+                    return False
+                time.sleep(0.005)
+        self._tid, self._shared, self._watchdog = tid, shared, watchdog
+        if not set_background(True):
+            return False
+        _lifter.write(shared, _lifter.BACKGROUND, 1)
+        return True
+
+    def set_due(self, due: float | None) -> None:
+        """From the stepping thread: the chunk it steps is due at monotonic time ``due``
+        (None: no wall-time schedule, never late)."""
+        if self._shared is not None:
+            _lifter.write(self._shared, _lifter.DUE, math.inf if due is None else due)
 
     def keeping_up(self) -> None:
         """From the stepping thread, when it is ahead of schedule: back to the background
         (once :data:`STAY_LIFTED_S` passed since it was lifted)."""
-        if self._tid is None or self._background \
-                or time.monotonic() - self._lifted_at < self._stay_lifted:
+        shared = self._shared
+        if shared is None:
             return
-        with self._lock:
-            if not self._stop.is_set() and set_background(True):
-                self._background = True
+        values = _lifter.read(shared)
+        if values[_lifter.BACKGROUND] or values[_lifter.STOP] \
+                or time.monotonic() - float(values[_lifter.LIFTED_AT]) < self._stay_lifted:
+            return
+        if set_background(True):
+            _lifter.write(shared, _lifter.BACKGROUND, 1)
 
     def close(self) -> None:
         """Stop watching and leave the stepping thread at normal priority; idempotent."""
-        self._stop.set()
-        join_thread(self._watchdog, 1.0, what="the background-stepping watchdog")
-        with self._lock:
-            if self._tid is not None and self._background:
-                set_background(False, self._tid)
-                self._background = False
-
-    def _watch(self) -> None:
-        while not self._stop.wait(self._period):
-            if not self._background or not self._behind():
-                continue
-            with self._lock:
-                if self._background and not self._stop.is_set():
-                    assert self._tid is not None
-                    if set_background(False, self._tid):
-                        self._background = False
-                        self._lifted_at = time.monotonic()
-                        self.lifts += 1
+        shared, watchdog = self._shared, self._watchdog
+        if shared is None or watchdog is None:
+            return
+        _lifter.write(shared, _lifter.STOP, 1)
+        try:
+            watchdog.wait(timeout=1.0)
+        except subprocess.TimeoutExpired:
+            watchdog.kill()
+            watchdog.wait()
+        self._lifts = int(_lifter.read(shared)[_lifter.LIFTS])
+        if _lifter.read(shared)[_lifter.BACKGROUND]:
+            assert self._tid is not None
+            set_background(False, self._tid)
+        self._shared = self._watchdog = None
+        shared.close()

@@ -69,8 +69,7 @@ def _on_a_thread(body: Callable[[threading.Event], None]) -> Iterator[list[int]]
 
 @needs_lift
 def test_the_stepping_thread_is_lifted_while_behind_and_returns_when_ahead() -> None:
-    behind = threading.Event()
-    stepping = BackgroundStepping(behind.is_set, watch_period_s=0.005, stay_lifted_s=0.2)
+    stepping = BackgroundStepping(lag_s=0.05, watch_period_s=0.005, stay_lifted_s=0.2)
     ahead = threading.Event()
     after_close: list[int] = []
 
@@ -86,10 +85,10 @@ def test_the_stepping_thread_is_lifted_while_behind_and_returns_when_ahead() -> 
     with _on_a_thread(body) as tid:
         assert _until(lambda: _policy(tid[0]) == os.SCHED_IDLE)
         assert stepping.background and stepping.lifts == 0
-        behind.set()  # starved: the watchdog lifts it
+        stepping.set_due(time.monotonic() - 0.1)  # starved: the watchdog lifts it
         assert _until(lambda: _policy(tid[0]) == os.SCHED_OTHER)
         assert stepping.lifts == 1 and not stepping.background
-        behind.clear()
+        stepping.set_due(None)
         ahead.set()  # caught up: back to the background, not at once
         lifted = time.monotonic()
         assert _until(lambda: _policy(tid[0]) == os.SCHED_IDLE)
@@ -103,7 +102,7 @@ def test_a_thread_that_could_not_come_back_is_never_put_in_the_background(
     monkeypatch.setattr(sim._priority, "can_lift", lambda: False)
     started: list[bool] = []
     with _on_a_thread(lambda done: (started.append(
-            BackgroundStepping(lambda: False).start()), done.wait(5.0))) as tid:
+            BackgroundStepping(lag_s=0.05).start()), done.wait(5.0))) as tid:
         assert _until(lambda: bool(started))
         assert started == [False]
         assert _policy(tid[0]) == os.SCHED_OTHER
@@ -139,25 +138,40 @@ def test_which_hosts_step_in_the_background(options: dict[str, object], expected
         assert seen == {os.SCHED_OTHER}
 
 
-@needs_lift
-def test_a_paced_host_keeps_up_on_a_machine_saturated_by_other_processes() -> None:
-    """Without the watchdog a host in the background gets 2-4 % of real time here; with
-    it 55-70 % (the watchdog waits for the GIL, which the starved loop may hold)."""
-    hogs = [subprocess.Popen([sys.executable, "-c", "while True: pass"])
-            for _ in range(os.cpu_count() or 2)]
-    host = _host(speed=1.0, background=True)
+def _pace(**options: object) -> float:
+    """Sim seconds per wall second of a paced host over 3 s (after 0.5 s to settle)."""
+    host = _host(speed=1.0, **options)
     try:
         with _on_a_thread(lambda done: host.run()):
+            time.sleep(0.5)
             start_t, start = host.t, time.monotonic()
             time.sleep(3.0)
             simulated, elapsed = host.t - start_t, time.monotonic() - start
             host.stop()
     finally:
         host.close()
+    return simulated / elapsed
+
+
+@needs_lift
+def test_a_paced_host_keeps_up_on_a_machine_saturated_by_other_processes() -> None:
+    """Without the watchdog a host in the background gets 2-4 % of real time here. A
+    watchdog thread got it 55-70 %, and 2 % with two more hogs beside the test: it waited
+    for the GIL, which the starved loop held. The watchdog process keeps the host at the
+    pace the same host keeps at normal priority under the same load (the floor, measured
+    just before)."""
+    hogs = [subprocess.Popen([sys.executable, "-c", "while True: pass"])
+            for _ in range(os.cpu_count() or 2)]
+    try:
+        floor = _pace()
+        background = _pace(background=True)
+    finally:
         for hog in hogs:
             hog.kill()
             hog.wait()
-    assert simulated > 0.3 * elapsed, f"{simulated:.2f} s simulated in {elapsed:.2f} s"
+    print(f"pace beside {len(hogs)} hogs: {floor:.2f} at normal priority, {background:.2f} "
+          f"in the background")
+    assert background > 0.8 * floor, f"{background:.2f} of real time, {floor:.2f} at normal"
 
 
 def test_the_command_line_asks_for_the_background_and_the_ready_line_says_so() -> None:

@@ -1,0 +1,66 @@
+"""The watchdog process of :mod:`sim._priority`: lifts a starved stepping thread.
+
+Why a process: a watchdog thread needs the GIL, which the stepping thread may
+hold while the kernel starves it in the background, so on a machine
+oversubscribed by other processes the thread meant to rescue it waited for it
+(0.06 s simulated in 3 s beside four CPU hogs on two cores). This process has
+an interpreter of its own and imports nothing but the standard library (it
+starts in a few tens of milliseconds): ``python sim/_lifter.py SHARED TID``.
+
+It shares a few numbers with the stepping process through a small file
+mapped into both (:data:`LAYOUT`): when the stepping thread is in the
+background and the chunk it steps is overdue by more than ``lag``, it
+sets the thread's policy back to normal (allowed to a process that may raise
+priorities, as the stepping one checked) and says so there.
+"""
+
+from __future__ import annotations
+
+import mmap
+import os
+import struct
+import sys
+import time
+
+LAYOUT = struct.Struct("<dddddqqqq")
+"""due (monotonic s, inf when not paced), lag (s), period (s), stay (unused here),
+lifted_at (monotonic s), background (0/1), lifts, stop (0/1), ready (0/1)."""
+DUE, LAG, PERIOD, STAY, LIFTED_AT, BACKGROUND, LIFTS, STOP, READY = range(9)
+
+
+def read(shared: mmap.mmap) -> list[float | int]:
+    """The shared numbers, in :data:`LAYOUT`'s order."""
+    return list(LAYOUT.unpack_from(shared, 0))
+
+
+def write(shared: mmap.mmap, field: int, value: float | int) -> None:
+    """One shared number (each is written whole: 8 aligned bytes)."""
+    fmt = "<d" if field <= LIFTED_AT else "<q"
+    struct.pack_into(fmt, shared, 8 * field, value)
+
+
+def watch(path: str, tid: int) -> None:
+    """Until told to stop or the stepping process is gone."""
+    parent = os.getppid()
+    with open(path, "r+b") as f:
+        shared = mmap.mmap(f.fileno(), LAYOUT.size)
+    write(shared, READY, 1)
+    while True:
+        values = read(shared)
+        time.sleep(float(values[PERIOD]))
+        values = read(shared)
+        if values[STOP] or os.getppid() != parent:
+            return
+        now = time.monotonic()
+        if values[BACKGROUND] and now - float(values[DUE]) > float(values[LAG]):
+            try:
+                os.sched_setscheduler(tid, os.SCHED_OTHER, os.sched_param(0))
+            except OSError:  # the thread is gone
+                return
+            write(shared, LIFTED_AT, now)
+            write(shared, BACKGROUND, 0)
+            write(shared, LIFTS, int(values[LIFTS]) + 1)
+
+
+if __name__ == "__main__":
+    watch(sys.argv[1], int(sys.argv[2]))
