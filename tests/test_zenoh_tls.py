@@ -393,6 +393,21 @@ def test_across_three_hosts_only_the_team_reads_and_only_its_gcs_commands(
                  "sysid": sysid, "gcs_id": 70 + k, "wait_s": wait})), stdout=subprocess.PIPE,
                 stderr=subprocess.PIPE, text=True)
                 for k, (name, (c, role, own, eps, sysid, wait)) in enumerate(peers.items())}
+            # which vehicles ever said they were armed (an armed vehicle left on the ground
+            # disarms itself after a while, as an autopilot does, and a busy machine may
+            # take that long to run the peers)
+            ever_armed: set[int] = set()
+            watching = threading.Event()
+
+            def watch() -> None:
+                while not watching.wait(0.02):
+                    for s in (1, 2, 3, 4):
+                        hb = manager.links[s].telemetry.heartbeat
+                        if hb is not None and hb.armed:
+                            ever_armed.add(s)
+
+            watcher = threading.Thread(target=watch, daemon=True)
+            watcher.start()
             manager.profiles[1].arm()  # the team's GCS commands over TLS, meanwhile
             said = {}
             for name, proc in procs.items():
@@ -400,10 +415,10 @@ def test_across_three_hosts_only_the_team_reads_and_only_its_gcs_commands(
                 assert proc.returncode == 0, f"{name}: {err}"
                 said[name] = json.loads(out.strip().splitlines()[-1])
             time.sleep(0.5)  # a vehicle armed by any of them has said so by now
-            armed = {s: manager.links[s].telemetry.heartbeat.armed  # type: ignore[union-attr]
-                     for s in (1, 2, 3, 4)}
+            watching.set()
+            watcher.join(timeout=5.0)
     assert said["stranger"] == {"heard": 0, "arm": "TIMEOUT"}, said
     assert said["impostor"] == {"heard": 0, "arm": "TIMEOUT"}, said
     assert said["viewer"]["heard"] > 0 and said["viewer"]["arm"] == "TIMEOUT", said
     assert said["second gcs"]["heard"] > 0 and said["second gcs"]["arm"] == "ACCEPTED", said
-    assert armed == {1: True, 2: False, 3: False, 4: True}, armed
+    assert ever_armed == {1, 4}, ever_armed
