@@ -198,7 +198,8 @@ class SimHost:
             if self._options.background and not self._options.lockstep else None
         if priority is not None and not priority.start():
             _log.warning("--background: this process may not raise a thread's priority again "
-                         "(root or CAP_SYS_NICE needed), so the loop steps at normal priority")
+                         "(root or CAP_SYS_NICE needed) or its watchdog process did not start, "
+                         "so the loop steps at normal priority")
         try:
             self._step_until_stopped(priority)
         finally:

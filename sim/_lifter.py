@@ -22,10 +22,10 @@ import struct
 import sys
 import time
 
-LAYOUT = struct.Struct("<dddddqqqq")
-"""due (monotonic s, inf when not paced), lag (s), period (s), stay (unused here),
-lifted_at (monotonic s), background (0/1), lifts, stop (0/1), ready (0/1)."""
-DUE, LAG, PERIOD, STAY, LIFTED_AT, BACKGROUND, LIFTS, STOP, READY = range(9)
+LAYOUT = struct.Struct("<ddddqqqq")
+"""due (monotonic s, inf when not paced), lag (s), period (s), lifted_at (monotonic s),
+background (0/1), lifts, stop (0/1), ready (0/1)."""
+DUE, LAG, PERIOD, LIFTED_AT, BACKGROUND, LIFTS, STOP, READY = range(8)
 
 
 def read(shared: mmap.mmap) -> list[float | int]:

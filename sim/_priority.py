@@ -130,8 +130,8 @@ class BackgroundStepping:
         tid = threading.get_native_id()
         with tempfile.NamedTemporaryFile(dir=_SHARED_DIR if os.path.isdir(_SHARED_DIR)
                                          else None, prefix="sim-lifter-") as f:
-            f.write(_lifter.LAYOUT.pack(math.inf, self._lag, self._period, self._stay_lifted,
-                                        -math.inf, 0, 0, 0, 0))
+            f.write(_lifter.LAYOUT.pack(math.inf, self._lag, self._period, -math.inf, 0, 0, 0,
+                                        0))
             f.flush()
             shared = mmap.mmap(f.fileno(), _lifter.LAYOUT.size)
             watchdog = subprocess.Popen([sys.executable, "-I", "-S", _lifter.__file__, f.name,
