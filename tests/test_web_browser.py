@@ -98,11 +98,15 @@ class Demo:
                          daemon=True).start()
         self.session = open_session(ZenohSettings(mode="peer", connect=(self.endpoint,)))
         self.truth: SimTruth | None = None
+        self.first: SimTruth | None = None  # the team's heading is measured from here
         topic = keys.sim("default", "truth")
         unseal = Unsealer(team_key(), topic).open  # the simulator seals it with the team key
-        self._sub = self.session.declare_subscriber(
-            topic, lambda s: setattr(self, "truth", SimTruth.from_bytes(
-                unseal(bytes(s.payload.to_bytes())))))
+
+        def take(sample) -> None:  # type: ignore[no-untyped-def]
+            self.truth = SimTruth.from_bytes(unseal(bytes(sample.payload.to_bytes())))
+            self.first = self.first or self.truth  # on the ground, before any turn
+
+        self._sub = self.session.declare_subscriber(topic, take)
 
     @staticmethod
     def _pump(stream, sink: list[str]) -> None:  # type: ignore[no-untyped-def]
@@ -122,11 +126,22 @@ class Demo:
         return self.truth
 
     def velocity(self, window: float = 0.4) -> np.ndarray:
-        """The team's true horizontal velocity over about ``window`` s of sim time, m/s."""
+        """The team's true horizontal velocity over about ``window`` s of sim time, m/s,
+        along its own axes (forward, right): the axes the sticks command. Once the team
+        has turned, "right" is no longer east."""
         first = self.sample()
         last = self.sample(after=first.t + window)
         moved = np.asarray(last.vehicle_p_ned)[:, :2] - np.asarray(first.vehicle_p_ned)[:, :2]
-        return moved.mean(axis=0) / (last.t - first.t)
+        north, east = moved.mean(axis=0) / (last.t - first.t)
+        c, s = np.cos(self.heading(last)), np.sin(self.heading(last))
+        return np.array([c * north + s * east, -s * north + c * east])
+
+    def heading(self, truth: SimTruth) -> float:
+        """How far the team has turned since its first truth sample, rad, clockwise from
+        above (its bearings from the centroid do not change as it scales)."""
+        assert self.first is not None, "no truth sample yet"
+        turned = np.angle(np.exp(1j * (_bearings(truth) - _bearings(self.first))))
+        return float(turned.mean())
 
     def spin(self, window: float = 0.4) -> float:
         """The team's true rotation rate about its centroid, rad/s, clockwise from above."""
@@ -585,7 +600,8 @@ def test_the_pilot_flies_the_team_with_buttons_keys_and_sticks(pilot, demo: Demo
     dv = steer(demo, lambda: keyboard.down("w"), lambda: keyboard.up("w"),
                held=commanded(pilot, "fwd", lambda v: v > 0.9, "fwd > 0.9 while W is held"))
     assert dv[0] > 0.1, (
-        f"velocity change {dv} m/s with W; expected north; {situation(pilot, demo)}")
+        f"velocity change {dv} m/s (forward, right) with W; expected forward; "
+        f"{situation(pilot, demo)}")
     wait_for(lambda: operator(pilot)["fwd"] == 0.0, 5, "sticks centred after W is released")
     assert str(operator(pilot)["source"]).startswith("browser#")
 
@@ -635,15 +651,19 @@ def test_the_pilot_flies_the_team_with_buttons_keys_and_sticks(pilot, demo: Demo
         mouse.down()
         mouse.move(cx + dx * pad["width"] / 2, cy, steps=4)
 
+    print(f"the team has turned {demo.heading(demo.sample()):.2f} rad: the pad's left is "
+          "along its own axes")
     dv = steer(demo, lambda: drag(-1.0), mouse.up,
                held=commanded(pilot, "right", lambda v: v < -0.9, "right < -0.9, pad left"))
     assert dv[1] < -0.1, (
-        f"velocity change {dv} m/s with the pad left; expected west; {situation(pilot, demo)}")
+        f"velocity change {dv} m/s (forward, right) with the pad left; expected left; "
+        f"{situation(pilot, demo)}")
     wait_for(lambda: operator(pilot)["right"] == 0.0, 5, "the pad springs back")
     dv = steer(demo, lambda: drag(1.0), mouse.up,
                held=commanded(pilot, "right", lambda v: v > 0.9, "right > 0.9, pad right"))
     assert dv[1] > 0.1, (
-        f"velocity change {dv} m/s with the pad right; expected east; {situation(pilot, demo)}")
+        f"velocity change {dv} m/s (forward, right) with the pad right; expected right; "
+        f"{situation(pilot, demo)}")
 
     # the rotation bar: dragged left is counter-clockwise, and springs back
     bar = pilot.locator("[data-gcs-pad=turn]").bounding_box()
@@ -741,7 +761,8 @@ def test_a_second_viewer_watches_until_it_takes_control(pilot, viewer, demo: Dem
     # c1 = 0.17/s: the team needs seconds to pick up speed; hold long enough under load
     dv = steer(demo, lambda: keyboard.down("a"), lambda: keyboard.up("a"), hold=3.5)
     assert dv[1] < -0.1, (
-        f"velocity change {dv} m/s with A; expected west; {situation(viewer, demo)}")
+        f"velocity change {dv} m/s (forward, right) with A; expected left; "
+        f"{situation(viewer, demo)}")
     assert operator(viewer)["source"] == f"browser#{viewer_id}"
 
     # the first viewer's keys are now ignored
@@ -817,8 +838,8 @@ def test_the_abort_stays_in_view_and_any_viewer_aborts(pilot, viewer, demo: Demo
         pilot.screenshot(path=str(shot))
         print(f"small window, panels collapsed: {shot}")
 
-        # the team flies east, well inside the geofence; the holder aborts from the keyboard
-        wait_for(lambda: demo.velocity()[1] > 0.05, 10, "the team flying east with D held",
+        # the team flies right (D), well inside the geofence; the holder aborts from the keyboard
+        wait_for(lambda: demo.velocity()[1] > 0.05, 10, "the team flying right with D held",
                  lambda: situation(viewer, demo))
         moving = demo.velocity()
         where = np.asarray(demo.sample().vehicle_p_ned)
