@@ -7,8 +7,10 @@ operator that step for ``gcs demo`` and ``gcs fly``.
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import ctypes
+import os
 import queue
 import signal
 import socket
@@ -25,6 +27,46 @@ __all__ = ["SimProcess", "SimStartError", "free_tcp_port"]
 
 _FIRST_NOTE_S = 5.0
 _NOTE_PERIOD_S = 15.0
+_BUSY_WINDOW_S = 10.0
+"""A simulator past its ready timeout still gets time while it used the CPU this recently."""
+_BUSY_SHARE = 0.05
+"""The share of one core over that window that says "working" (compiling), not "stuck"."""
+_CEILING = 5.0
+"""A busy simulator gets at most this many times its ready timeout."""
+
+
+def cpu_seconds(pid: int) -> float | None:
+    """CPU time a process has used, s (Linux ``/proc``); None where it cannot be read."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    except (OSError, IndexError, ValueError):
+        return None
+
+
+class _Busy:
+    """Whether a starting process is working (its CPU time grows), so that a first start
+    that compiles its kernels on a loaded machine is not mistaken for a hung one."""
+
+    def __init__(self, pid: int) -> None:
+        self._pid = pid
+        self._samples: collections.deque[tuple[float, float]] = collections.deque()
+
+    def sample(self, now: float) -> None:
+        cpu = cpu_seconds(self._pid)
+        if cpu is not None:
+            self._samples.append((now, cpu))
+            while len(self._samples) > 2 and now - self._samples[1][0] >= _BUSY_WINDOW_S:
+                self._samples.popleft()
+
+    def working(self) -> bool:
+        if len(self._samples) < 2:
+            return False
+        (t0, c0), (t1, c1) = self._samples[0], self._samples[-1]
+        return t1 > t0 and (c1 - c0) >= _BUSY_SHARE * (t1 - t0)
+
+    def used(self) -> float | None:
+        return self._samples[-1][1] if self._samples else None
 
 
 class SimStartError(RuntimeError):
@@ -58,7 +100,9 @@ class SimProcess:
         progress: told a line every few seconds while the simulator is not ready yet (its
             first start compiles its kernels, which can take a minute: not a hang).
         extra: more command-line arguments for the sim.
-        ready_timeout: how long to wait for its ready line, s.
+        ready_timeout: how long to wait for its ready line, s; up to five times that
+            while the simulator is working (its CPU time grows: a first start compiling
+            its kernels on a loaded machine), so only an idle or runaway one is given up.
         wrap: turns the command into the one to run, e.g. on another host
             (:meth:`gcs.testing.Host.command`); it must exec the sim, not fork it.
     """
@@ -82,7 +126,7 @@ class SimProcess:
         threading.Thread(target=self._pump, args=(self._proc.stderr, False),
                          daemon=True).start()
         start = time.monotonic()
-        deadline = start + ready_timeout
+        busy = _Busy(self._proc.pid)
         next_note = start + _FIRST_NOTE_S
         while True:
             try:
@@ -90,16 +134,24 @@ class SimProcess:
             except queue.Empty:
                 line = ""
             now = time.monotonic()
+            busy.sample(now)
             if progress is not None and now >= next_note and not line.startswith("sim ready"):
-                progress(f"the simulator is still starting ({now - start:.0f} s): its first "
-                         f"start compiles its kernels, up to a minute; later starts load them")
+                used = busy.used()
+                cpu = "" if used is None else f", {used:.0f} s of CPU"
+                progress(f"the simulator is still starting ({now - start:.0f} s{cpu}): its "
+                         f"first start compiles its kernels, up to a minute on a free core; "
+                         f"later starts load them")
                 next_note = now + _NOTE_PERIOD_S
             if line.startswith("sim ready"):
                 self.ready_line = line.strip()
                 return
-            if self._proc.poll() is not None or time.monotonic() > deadline:
+            late = now - start > ready_timeout
+            if self._proc.poll() is not None or (late and not busy.working()) \
+                    or now - start > _CEILING * ready_timeout:
                 why = ("exited" if self._proc.returncode is not None
-                       else f"was not ready after {ready_timeout:g} s")
+                       else f"was not ready after {now - start:.0f} s "
+                            f"({'still busy' if busy.working() else 'idle'}: ready timeout "
+                            f"{ready_timeout:g} s, {_CEILING:g}x that while it works)")
                 self.close()
                 detail = " | ".join(self._err[-5:]) or "no output"
                 raise SimStartError(f"the simulator {why}: {detail}" if why[0] == "w"
