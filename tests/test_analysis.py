@@ -165,6 +165,8 @@ JSON_KEYS: dict[str, object] = {
     "largest_payload_kg": None,
     "lift": {"altitude_m": None, "ceiling_m": None},
     "scales_flown": {"min": None, "max": None},
+    "shape_hold": dict.fromkeys(["weakest_stiffness", "disturbance_m_s2", "drift_error_m",
+                                 "new_edges", "new_stiffness"]),
     "violations": None, "warnings": None, "ok": None,
 }
 VIOLATION_KEYS = ["term", "message", "fixes"]

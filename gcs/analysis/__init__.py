@@ -11,6 +11,8 @@ Modules:
 
     ``_safe_guidance`` The guidance config the GCS flies: the scale capped at the safe
                       deformation.
+    ``_shape_hold``   The shape's weakest deformation mode: how far an unseen disturbance
+                      bends it under the guidance.
     ``_static_load``  The payload hanging at rest from its ropes: where it hangs, which
                       ropes pull, how hard.
     ``_team_load``    The payload's load on each vehicle of a team: at its desired shape, at
@@ -21,6 +23,7 @@ Modules:
 """
 
 from gcs.analysis._safe_guidance import safe_guidance
+from gcs.analysis._shape_hold import ShapeHold, drift_error, shape_hold, weakest_mode
 from gcs.analysis._static_load import (
     NoHangingPointError,
     StaticLoad,
@@ -51,6 +54,7 @@ __all__ = [
     "AcceleratingShare",
     "Analysis",
     "NoHangingPointError",
+    "ShapeHold",
     "StaticLoad",
     "StaticShares",
     "WorstLoad",
@@ -60,12 +64,15 @@ __all__ = [
     "analysis_json",
     "analyze",
     "desired_load",
+    "drift_error",
     "even_rope_lengths",
     "format_report",
     "hang_depth",
     "hanging_point",
     "largest_payload",
     "safe_guidance",
+    "shape_hold",
     "static_load",
+    "weakest_mode",
     "worst_load",
 ]

@@ -46,7 +46,10 @@ vehicle taken from the geometry (:mod:`gcs.analysis._team_load`):
   the geometry's), named as a fix wherever the payload breaks a condition: no fix
   is ever a negative limit or bank angle;
 * the lift: the altitude where the payload leaves the ground (at the smallest
-  scale) plus the lift height, under ``operator.altitude_max`` and the geofence.
+  scale) plus the lift height, under ``operator.altitude_max`` and the geofence;
+* the shape's weakest deformation mode (:mod:`gcs.analysis._shape_hold`): the distance
+  error an unseen ``analysis.disturbance_accel`` per vehicle holds it at, within the
+  safe deformation, or the distance gain and the edges that bring it there.
 """
 
 from __future__ import annotations
@@ -59,6 +62,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from gcs.analysis._shape_hold import ShapeHold, shape_hold
 from gcs.analysis._static_load import NoHangingPointError
 from gcs.analysis._team_load import (
     WorstLoad,
@@ -206,6 +210,8 @@ class Analysis:
     """The smallest scale the GCS flies (:func:`flown_scale_min`)."""
     scale_max_flown: float
     """The largest scale the GCS flies (:func:`flown_scale_max`)."""
+    shape_hold: ShapeHold
+    """The shape's weakest mode and the distance error it allows (:mod:`._shape_hold`)."""
     violations: tuple[Violation, ...] = field(default=())
     warnings: tuple[str, ...] = field(default=())
 
@@ -291,6 +297,13 @@ class Analysis:
                      "ceiling_m": _num(self.lift_ceiling)},
             "scales_flown": {"min": _num(self.scale_min_flown),
                              "max": _num(self.scale_max_flown)},
+            "shape_hold": {
+                "weakest_stiffness": _num(self.shape_hold.stiffness),
+                "disturbance_m_s2": _num(self.shape_hold.disturbance),
+                "drift_error_m": _num(self.shape_hold.drift_error),
+                "new_edges": [list(e) for e in self.shape_hold.new_edges],
+                "new_stiffness": _num(self.shape_hold.new_stiffness),
+            },
             "violations": [asdict(v) for v in self.violations],
             "warnings": list(self.warnings),
             "ok": self.ok,
@@ -797,6 +810,10 @@ def analyze(team: Team) -> Analysis:
         warnings.append(f"eq. max assumes distance errors up to {_n(e_max, 2)} m, beyond the "
                         f"safe deformation of {_n(safe_margin)} m")
 
+    hold = shape_hold(f, cfg.guidance.c2, cfg.analysis.disturbance_accel, safe_margin)
+    if safe_margin > 0 and hold.drift_error > safe_margin:
+        violations.append(_hold_violation(team, hold, safe_margin))
+
     lift_altitude, ceiling = _lift(team, violations)
 
     return Analysis(
@@ -817,9 +834,28 @@ def analyze(team: Team) -> Analysis:
         safe_span=safe_span, safe_deformation=safe_margin,
         load=ld if ld is not None else _no_shares(lengths, assumed),
         largest_payload=heaviest, lift_altitude=lift_altitude, lift_ceiling=ceiling,
-        scale_min_flown=smallest, scale_max_flown=largest,
+        scale_min_flown=smallest, scale_max_flown=largest, shape_hold=hold,
         violations=tuple(violations), warnings=tuple(warnings),
     )
+
+
+def _hold_violation(team: Team, hold: ShapeHold, safe: float) -> Violation:
+    """The shape's weakest mode lets the unseen disturbance bend it past the safe
+    deformation: the distance gain that holds it, and the edges that stiffen it."""
+    c2 = team.config.guidance.c2
+    needed = c2 * hold.drift_error / safe
+    tie = ", ".join(f"{i}-{j}" for i, j in hold.new_edges)
+    edges = (f", or tie vehicles {tie} (stiffness {hold.new_stiffness:.3g}; eq. max must "
+             f"still hold with the longer edges)" if tie
+             else ", or add edges across the shape")
+    return Violation(
+        "guidance.c2",
+        f"the shape's weakest deformation mode (stiffness {hold.stiffness:.3g}; the "
+        f"square's is 2) holds the distance errors only within {_n(hold.drift_error)} m "
+        f"under an unseen {hold.disturbance:g} m/s^2 per vehicle "
+        f"(analysis.disturbance_accel), beyond the safe deformation {_n(safe)} m: raise "
+        f"guidance.c2 to at least {needed:.3f} (eq. max must still hold){edges}",
+        {"guidance.c2": needed})
 
 
 def _limit_violation(name: str, value: float, what: str, largest: float,
@@ -940,6 +976,8 @@ def format_report(a: Analysis, source: str) -> str:
          val(a.max_accel_axis, "m/s^2")),
         ("largest safe distance between opposite vehicles", val(a.safe_span, "m")),
         ("maximum safe deformation (beyond the nominal shape)", val(a.safe_deformation, "m")),
+        (f"shape's weakest mode: stiffness {a.shape_hold.stiffness:.3g}, its distance error "
+         f"under {a.shape_hold.disturbance:g} m/s^2", val(a.shape_hold.drift_error, "m")),
         ("scales of the shape the GCS flies",
          f"{a.scale_min_flown:.3f} to {a.scale_max_flown:.3f}"),
         ("largest payload the team can carry", val(a.largest_payload, "kg")),

@@ -204,6 +204,12 @@ class AnalysisConfig:
         doc="a vehicle's position hold in series with its rope, N/m: how far a rope's pull "
             "moves its vehicle (100 fits the simulator's vehicles)", default=100.0, gt=0.0,
         le=1e7)
+    disturbance_accel: float = field(
+        doc="steady acceleration per vehicle the guidance neither commands nor sees "
+            "(tracking residual, gusts, rope pulls in motion), m/s^2: the shape's weakest "
+            "mode must hold it within the safe deformation (0.025 covers the simulator's "
+            "paper flight with gusts; measure your vehicles')", default=0.025, gt=0.0,
+        le=10.0)
 
 
 @dataclass(frozen=True)
