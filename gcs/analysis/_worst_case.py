@@ -812,7 +812,9 @@ def analyze(team: Team) -> Analysis:
 
     hold = shape_hold(f, cfg.guidance.c2, cfg.analysis.disturbance_accel, safe_margin)
     if safe_margin > 0 and hold.drift_error > safe_margin:
-        violations.append(_hold_violation(team, hold, safe_margin))
+        # the distance gain eq. max leaves room for, the other terms as they are
+        c2_room = (max_axis - lhs + terms["c2_distance"]) / (e_max * kappa)
+        violations.append(_hold_violation(team, hold, safe_margin, c2_room))
 
     lift_altitude, ceiling = _lift(team, violations)
 
@@ -839,23 +841,26 @@ def analyze(team: Team) -> Analysis:
     )
 
 
-def _hold_violation(team: Team, hold: ShapeHold, safe: float) -> Violation:
+def _hold_violation(team: Team, hold: ShapeHold, safe: float, c2_room: float) -> Violation:
     """The shape's weakest mode lets the unseen disturbance bend it past the safe
-    deformation: the distance gain that holds it, and the edges that stiffen it."""
+    deformation: the distance gain that holds it (and whether eq. max leaves room for
+    it, ``c2_room``), and the edges that stiffen it."""
     c2 = team.config.guidance.c2
     needed = c2 * hold.drift_error / safe
+    gain = (f"raise guidance.c2 to at least {needed:.3f}" if needed <= c2_room else
+            f"guidance.c2 would need at least {needed:.3f}, beyond the {max(c2_room, 0.0):.3f} "
+            f"eq. max leaves room for")
     tie = ", ".join(f"{i}-{j}" for i, j in hold.new_edges)
-    edges = (f", or tie vehicles {tie} (stiffness {hold.new_stiffness:.3g}; eq. max must "
-             f"still hold with the longer edges)" if tie
-             else ", or add edges across the shape")
+    edges = (f"tie vehicles {tie} (stiffness {hold.new_stiffness:.3g}; eq. max must "
+             f"still hold with the longer edges)" if tie else "add edges across the shape")
     return Violation(
-        "guidance.c2",
+        "guidance.c2" if needed <= c2_room else "edges",
         f"the shape's weakest deformation mode (stiffness {hold.stiffness:.3g}; the "
         f"square's is 2) holds the distance errors only within {_n(hold.drift_error)} m "
         f"under an unseen {hold.disturbance:g} m/s^2 per vehicle "
-        f"(analysis.disturbance_accel), beyond the safe deformation {_n(safe)} m: raise "
-        f"guidance.c2 to at least {needed:.3f} (eq. max must still hold){edges}",
-        {"guidance.c2": needed})
+        f"(analysis.disturbance_accel), beyond the safe deformation {_n(safe)} m: "
+        + (f"{gain}, or {edges}" if needed <= c2_room else f"{edges} ({gain})"),
+        {"guidance.c2": needed} if needed <= c2_room else {})
 
 
 def _limit_violation(name: str, value: float, what: str, largest: float,
