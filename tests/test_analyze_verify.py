@@ -107,9 +107,10 @@ def test_the_square_is_flown_on_two_seeds_and_held_to_its_analysis() -> None:
 def test_a_flight_beyond_a_tiny_safe_deformation_fails_naming_the_figure(
         tmp_path: Path) -> None:
     """A square whose acceleration limit leaves it 2 cm of safe deformation passes the
-    analysis, and its flight, pulled 0.2 m in at lift-off, exceeds it."""
+    analysis (assuming a push its weakest mode holds within that: 0.005 m/s^2 gives
+    0.013 m), and its flight, pulled 0.2 m in at lift-off, exceeds it."""
     team = _team(tmp_path, limits={"accel_norm": 2.729},
-                 analysis={"design_rope_angle_deg": 40.0})
+                 analysis={"design_rope_angle_deg": 40.0, "disturbance_accel": 0.005})
     assert run_gcs("analyze", str(team)).returncode == 0
     out = run_gcs("analyze", str(team), "--verify", "--scenario", SHORT, "--seeds", "3",
                   "--jobs", "1")

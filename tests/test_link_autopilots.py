@@ -131,6 +131,33 @@ def test_ardupilot_guided_arm_takeoff_then_acceleration_only(udp_link: Link) -> 
         assert r.msg.afz == pytest.approx(-0.5, abs=1e-6)
 
 
+def test_ardupilot_answers_positions_only_with_a_setpoint_the_caller_sent(
+        udp_link: Link) -> None:
+    """The GCS loop asks for the vertical channel, then sends the setpoint. A position
+    arriving in between was answered with the new altitude target and the horizontal
+    acceleration of before: (0, 0) at the start of a stream (a CI run beside two CPU
+    hogs caught it). Here the gap is held open for a second: no setpoint goes out until
+    the caller's does, and every one after carries its acceleration."""
+    peer = start_peer(udp_link, "ardupilot", flies=True)
+    try:
+        profile = ArduPilotProfile(udp_link)
+        profile.takeoff(altitude_m=1.0)
+        time.sleep(1.0)
+        profile.vertical_setpoint(-2.0)  # asked, not sent yet
+        time.sleep(1.0)  # 20 positions arrive meanwhile
+        asked_only = list(peer.setpoints())
+        start = time.monotonic()
+        while time.monotonic() - start < 2.0:
+            profile.send_setpoint(accel_xy_ned=(0.3, -0.2), z_ned=-2.0)
+            time.sleep(0.25)
+    finally:
+        peer.stop()
+    assert asked_only == []
+    setpoints = peer.setpoints()
+    assert len(setpoints) > 8  # the caller's, and one per position between them
+    assert all((r.msg.afx, r.msg.afy) == pytest.approx((0.3, -0.2)) for r in setpoints)
+
+
 def test_ardupilot_closes_the_vertical_loop_at_telemetry_rate(udp_link: Link) -> None:
     """The 4 Hz caller's setpoints are joined by one per position (20 Hz), which climb the
     copter to the target; none before the caller streams, none once it stopped."""

@@ -95,8 +95,10 @@ class ArduPilotProfile(ProfileBase):
         """Positions get setpoints of their own while the caller's last one is this recent, s
         (the GCS loop re-sends at 12 Hz: older means it stopped streaming)."""
         self._lock = threading.Lock()
-        self._z_ref: float | None = None  # the caller's latest altitude target, m (NED)
-        self._z_ref_at = -math.inf  # link clock time of that target
+        self._z_ref: float | None = None  # the altitude target of the last setpoint sent, m
+        self._z_ref_at = -math.inf  # link clock time it was sent
+        self._z_next: float | None = None  # the caller's target, until its setpoint is sent
+        self._own = threading.local()  # .sending: this thread sends a per-position setpoint
         self._accel_xy = (0.0, 0.0)  # horizontal acceleration last sent, m/s^2
         self._guided = False  # whether the latest HEARTBEAT shows GUIDED
         link.add_frame_listener(self._on_frame)
@@ -154,14 +156,16 @@ class ArduPilotProfile(ProfileBase):
         position = self._position(max_age_s=self.max_position_age_s)
         az = self.vertical.accel_down(z_ref_ned=z_ned, z_ned=position.p_ned[2],
                                       vz_ned=position.v_ned[2])
-        now = self.link.clock()
-        with self._lock:
-            self._z_ref, self._z_ref_at = z_ned, now
+        with self._lock:  # followed once its setpoint goes out, with that setpoint's afx, afy
+            self._z_next = z_ned
         return az
 
     def _on_frame(self, direction: FrameDirection, frame: bytes) -> None:
-        """Remember the horizontal acceleration of every setpoint sent (under the send lock:
-        quick, and never sends)."""
+        """Remember the horizontal acceleration of every setpoint sent, and the altitude
+        target it was computed for (under the send lock: quick, and never sends). Taken
+        together, so a position arriving between the caller's target and its setpoint is
+        never answered with the new target and the old acceleration (under load the
+        first per-position setpoint carried (0, 0))."""
         if direction is not FrameDirection.OUT or len(frame) < 12 or frame[0] != 0xFD:
             return
         if int.from_bytes(frame[7:10], "little") != SETPOINT_MESSAGE.id:
@@ -169,8 +173,11 @@ class ArduPilotProfile(ProfileBase):
         msg = unpack_v2(bytearray(frame), msgid=SETPOINT_MESSAGE.id,
                         signature_len=13 if frame[2] & 1 else 0)
         if msg is not None:
+            now = self.link.clock()
             with self._lock:
                 self._accel_xy = (float(msg.afx), float(msg.afy))
+                if self._z_next is not None and not getattr(self._own, "sending", False):
+                    self._z_ref, self._z_ref_at, self._z_next = self._z_next, now, None
 
     def _on_record(self, record: TelemetryRecord) -> None:
         """A new position while the GCS streams: a setpoint with ``afz`` from it (receive
@@ -189,16 +196,19 @@ class ArduPilotProfile(ProfileBase):
         try:
             az = self.vertical.accel_down(z_ref_ned=z_ref, z_ned=record.p_ned[2],
                                           vz_ned=record.v_ned[2])
+            self._own.sending = True  # its frame is not the caller's (:meth:`_on_frame`)
             self.link.send_setpoint(accel_xy_ned=accel_xy, az_ned=az)
         except (ValueError, LinkError):
             return  # a bad position or a closed link: the GCS loop reports its own sends
+        finally:
+            self._own.sending = False
 
     def set_mode(self, mode: CopterMode) -> None:
         """Any ArduCopter mode by MAV_CMD_DO_SET_MODE, confirmed; leaving GUIDED ends the
         setpoints sent per position until the caller streams again."""
         if mode != CopterMode.GUIDED:
             with self._lock:
-                self._z_ref = None
+                self._z_ref = self._z_next = None
         self._set_mode(int(mode), what=CopterMode(mode).name)
 
     def land(self) -> None:
