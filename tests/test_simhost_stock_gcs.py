@@ -123,17 +123,25 @@ def test_px4_modes_by_name_are_accepted_and_named_back(base_port: int) -> None:
         receive(conn, "HEARTBEAT", lambda m: mavutil.mode_string_v10(m) == "LOITER",
                 timeout=10.0)
 
+        # One connection, two senders: a signed frame's timestamp is taken when it is
+        # packed, so two threads packing at once can send a later stamp first, and the
+        # vehicle then drops the earlier one as a replay, as the signing spec says (the
+        # mode command went unanswered once in 6 runs). MAVProxy sends from one thread.
+        sending = threading.Lock()
+
         def stream() -> None:  # hold setpoints at 10 Hz, as PX4 wants before OFFBOARD
             while not stop.wait(0.1):
-                conn.mav.set_position_target_local_ned_send(
-                    0, 2, 1, mavlink.MAV_FRAME_LOCAL_NED, MASK_ACCEL_XY_POS_Z, 0, 0, -0.5,
-                    0, 0, 0, 0, 0, 0, 0, 0)
+                with sending:
+                    conn.mav.set_position_target_local_ned_send(
+                        0, 2, 1, mavlink.MAV_FRAME_LOCAL_NED, MASK_ACCEL_XY_POS_Z, 0, 0, -0.5,
+                        0, 0, 0, 0, 0, 0, 0, 0)
 
         streamer = threading.Thread(target=stream, daemon=True)
         streamer.start()
         time.sleep(0.5)
         for name in ("OFFBOARD", "POSCTL", "LAND"):
-            conn.set_mode(name)  # what "mode OFFBOARD" asks for: DO_SET_MODE with px4_map
+            with sending:
+                conn.set_mode(name)  # what "mode OFFBOARD" asks for: DO_SET_MODE, px4_map
             ack = receive(conn, "COMMAND_ACK",
                           lambda m: m.command == mavlink.MAV_CMD_DO_SET_MODE)
             assert ack.result == mavlink.MAV_RESULT_ACCEPTED, name
