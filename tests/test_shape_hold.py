@@ -60,10 +60,9 @@ def test_the_weakest_stiffness_is_the_guidance_kernels(config: str) -> None:
 
 def test_known_shapes() -> None:
     """The square with its diagonals: 2; the equilateral triangle: 3/2."""
-    assert weakest_mode(load_team(TEAMS[0]).formation.positions,
-                        load_team(TEAMS[0]).formation.edges) == pytest.approx(2.0)
-    f = load_team(TEAMS[1]).formation
-    assert weakest_mode(f.positions, f.edges) == pytest.approx(1.5)
+    for config, stiffness in zip(TEAMS[:2], (2.0, 1.5), strict=True):
+        f = load_team(config).formation
+        assert weakest_mode(f.positions, f.edges) == pytest.approx(stiffness)
 
 
 @pytest.mark.parametrize(("config", "a", "linear"), [

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gcs.formation import Formation
+from gcs.formation import Formation, rigidity_matrix
 
 __all__ = ["ShapeHold", "drift_error", "shape_hold", "stiffening_edges", "weakest_mode"]
 
@@ -53,16 +53,11 @@ class ShapeHold:
 
 
 def _unit_rigidity(positions: np.ndarray, edges: np.ndarray) -> np.ndarray:
-    """(m, 2n) rigidity matrix of the horizontal shape with unit edge directions."""
+    """(m, 2n) rigidity matrix of the horizontal shape, each row scaled to unit edge
+    direction."""
     p = np.asarray(positions, dtype=float)[:, :2]
-    z = p[edges[:, 0]] - p[edges[:, 1]]
-    u = z / np.linalg.norm(z, axis=1)[:, None]
-    R = np.zeros((len(edges), 2 * len(p)))
-    rows = np.arange(len(edges))
-    for axis in range(2):
-        R[rows, 2 * edges[:, 0] + axis] = u[:, axis]
-        R[rows, 2 * edges[:, 1] + axis] = -u[:, axis]
-    return R
+    lengths = np.linalg.norm(p[edges[:, 0]] - p[edges[:, 1]], axis=1)
+    return rigidity_matrix(p, edges) / lengths[:, None]
 
 
 def weakest_mode(positions: np.ndarray, edges: np.ndarray) -> float:

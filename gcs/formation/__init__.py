@@ -11,7 +11,7 @@ Modules:
 """
 
 from gcs.formation._fit import fit_rotation, fit_shape
-from gcs.formation._graph import Formation, FormationError, build_formation
+from gcs.formation._graph import Formation, FormationError, build_formation, rigidity_matrix
 from gcs.formation._motion import MotionBasis, motion_basis
 
 __all__ = [
@@ -22,4 +22,5 @@ __all__ = [
     "fit_rotation",
     "fit_shape",
     "motion_basis",
+    "rigidity_matrix",
 ]
