@@ -6,7 +6,9 @@ import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
 
-from gcs.loop import ExternalClock, GatedClock, StepGate
+import pytest
+
+from gcs.loop import ClockStoppedError, ExternalClock, GatedClock, StepGate
 
 
 def test_disabled_gate_gates_nothing() -> None:
@@ -146,3 +148,23 @@ def test_an_external_clock_starts_at_its_first_sample() -> None:
     threading.Timer(0.1, clock.advance, args=(1 / 128,)).start()
     clock.sleep_until(0.0)
     assert clock.now() == 1 / 128
+
+
+def test_a_stopped_clock_is_timed_from_its_last_sample_and_tells_every_waiter_at_once() -> None:
+    # the loop and the scenario behind it both wait on the simulator's clock: when it
+    # stops, the second must not wait out a timeout of its own after the first gave up
+    clock = ExternalClock(timeout=1.0)
+    clock.advance(0.5)
+    time.sleep(0.6)
+    start = time.monotonic()
+    with pytest.raises(ClockStoppedError, match=r"no simulator clock sample for 1 s \(stuck "
+                                                r"at t = 0\.500 s\)"):
+        clock.sleep_until(1.0)
+    assert time.monotonic() - start < 0.9  # 1 s after the sample, not after the call
+    start = time.monotonic()
+    with pytest.raises(ClockStoppedError, match="no simulator clock sample for 1 s"):
+        clock.sleep_until(1.0)
+    assert time.monotonic() - start < 0.9  # at once: the clock stays stopped
+    clock.advance(0.75)  # a late sample does not restart a clock the loop has given up on
+    with pytest.raises(ClockStoppedError):
+        clock.sleep_until(1.0)

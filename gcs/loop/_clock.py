@@ -51,7 +51,9 @@ class ExternalClock:
     its schedule after it starts on the source's first time, not on a 0.0 it
     read first on one run and not on another. If no sample arrives for
     ``timeout`` wall seconds, ``sleep_until`` raises :class:`ClockStoppedError`
-    instead of hanging forever.
+    instead of hanging forever, and the clock stays stopped: the timeout counts from
+    the last sample, not from each call, so a second waiter (the scenario behind the
+    loop) hears the verdict at once instead of waiting out a timeout of its own.
     """
 
     def __init__(self, *, timeout: float = 5.0) -> None:
@@ -60,6 +62,7 @@ class ExternalClock:
         self._timeout = timeout
         self._closed: str | None = None  # why the clock was closed
         self._started = False  # a sample came
+        self._last = 0.0  # monotonic wall time of the last sample that moved the clock
 
     def advance(self, t: float) -> None:
         """Move to sim time ``t`` if it is later (never back); ValueError if not finite."""
@@ -69,6 +72,7 @@ class ExternalClock:
             if t > self._t or not self._started:
                 self._t = max(self._t, t)
                 self._started = True
+                self._last = time.monotonic()
                 self._cond.notify_all()
 
     def close(self, reason: str = "the simulator clock was closed") -> None:
@@ -84,9 +88,14 @@ class ExternalClock:
 
     def sleep_until(self, t: float) -> None:
         with self._cond:
+            called = time.monotonic()  # before the first sample, the timeout counts from here
             while self._t < t or not self._started:
                 if self._closed:
                     raise ClockStoppedError(self._closed)
-                if not self._cond.wait(self._timeout):
-                    raise ClockStoppedError(f"no simulator clock sample for {self._timeout:g} s "
-                                       f"(stuck at t = {self._t:.3f} s)")
+                left = (self._last if self._started else called) + self._timeout - time.monotonic()
+                if left <= 0:
+                    self._closed = (f"no simulator clock sample for {self._timeout:g} s "
+                                    f"(stuck at t = {self._t:.3f} s)")
+                    self._cond.notify_all()
+                    raise ClockStoppedError(self._closed)
+                self._cond.wait(left)
