@@ -28,12 +28,15 @@ Modules:
                    is.
 """
 
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
 from gcs.flightlog._events import EventLine, event_lines
 from gcs.flightlog._flight import FlightLog, Track, tilt_angle
 from gcs.flightlog._metrics import FlightMetrics
 from gcs.flightlog._reader import LogError, TlogIndex
 from gcs.flightlog._recorder import TlogRecorder
-from gcs.flightlog._report import write_report
 from gcs.flightlog._shades import PHASE_SHADES
 
 __all__ = [
@@ -49,3 +52,14 @@ __all__ = [
     "tilt_angle",
     "write_report",
 ]
+
+
+def write_report(log: FlightLog, out: Path,
+                 progress: Callable[[str], None] | None = None) -> dict[str, Any]:
+    """Write the figures and summaries of ``log`` into ``out``; returns the summary.
+
+    ``_report`` (and matplotlib, 0.35 s) loads on the first call: the GCS and the
+    simulators import this package for the recorder and never draw."""
+    from gcs.flightlog._report import write_report as write
+
+    return write(log, out, progress)

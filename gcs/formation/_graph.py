@@ -15,7 +15,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from gcs.common import kernel
 
@@ -78,6 +77,10 @@ def realize_positions(n: int, edges: np.ndarray, distances: np.ndarray) -> np.nd
     Deterministic: least squares from a few regular-polygon starts (with and without
     a reflection); the best fit is returned and the caller checks the residual.
     """
+    # imported here: scipy.optimize is 0.45 s of every process's start, and a team given
+    # by its positions (every shipped one) never fits
+    from scipy.optimize import least_squares
+
     best: np.ndarray | None = None
     best_cost = np.inf
     angles = 2.0 * np.pi * np.arange(n) / n
