@@ -11,7 +11,7 @@ from typing import NamedTuple
 import numpy as np
 import pytest
 import yaml
-from scipy.signal import freqz, lfilter
+from scipy.signal import butter, freqz, lfilter
 
 from gcs.wire import SimMode
 from sim import (
@@ -132,6 +132,9 @@ def test_butterworth_has_unit_dc_gain_and_half_power_at_the_cutoff() -> None:
     assert [biquad_step(coef, z, 0, 0, 3.5) for _ in range(5)] == pytest.approx([3.5] * 5)
     with pytest.raises(ValueError, match="Nyquist"):
         butterworth2(300.0, 512.0)
+    for cutoff, rate in ((5.0, 512.0), (20.0, 500.0), (1.0, 50.0), (200.0, 512.0)):
+        b, a = butter(2, cutoff, btype="low", fs=rate)
+        assert butterworth2(cutoff, rate) == pytest.approx([*b, *a[1:]], rel=1e-12, abs=1e-15)
 
 
 def true_accel_ned(world: World) -> np.ndarray:
