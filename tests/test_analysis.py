@@ -268,3 +268,15 @@ def test_cli_bad_config_is_one_line(tmp_path: Path) -> None:
     assert out.returncode == 2
     assert out.stderr.count("\n") == 1
     assert "bad.yaml: airframe: missing required field" in out.stderr
+
+
+def test_a_team_is_analysed_once_and_a_changed_team_afresh() -> None:
+    """The command line, the scenario check and the GCS each ask for the analysis of the
+    same loaded team: it is computed once; a team made with other settings has its own."""
+    team = load_team(SQUARE)
+    first = analyze(team)
+    assert analyze(team) is first
+    heavier = dataclasses.replace(team, config=dataclasses.replace(
+        team.config, payload=dataclasses.replace(team.config.payload, mass=0.6)))
+    assert analyze(heavier) is not first
+    assert analyze(heavier).equilibrium_tension > first.equilibrium_tension
