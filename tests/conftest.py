@@ -3,6 +3,7 @@ second host."""
 
 from __future__ import annotations
 
+import fcntl
 import json
 import os
 import shutil
@@ -59,10 +60,20 @@ def run_gcs(*args: str, timeout: float = 300) -> subprocess.CompletedProcess[str
 def short_flight(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict, Path]:
     """``gcs fly --json --record`` of the short scenario: its metrics and its .tlog.
 
-    Flown once per test session (about 40 s): the report and the replay tests read the
-    same recording.
+    Flown once per test session (about 10 s of CPU): the report and the replay tests
+    read the same recording, and the workers of one pytest-xdist session share it (the
+    first to need it flies it; the others wait for it under a file lock).
     """
-    log = tmp_path_factory.mktemp("flight") / "short.tlog"
-    out = run_gcs("fly", "--config", SQUARE, "--scenario", SHORT, "--json", "--record", str(log))
-    assert out.returncode == 0, out.stdout + out.stderr
-    return json.loads(out.stdout.splitlines()[-1]), log
+    base = tmp_path_factory.getbasetemp()
+    shared = base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base  # this session's
+    lock_path, done = shared / "short_flight.lock", shared / "short_flight.json"
+    with open(lock_path, "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not done.exists():
+            log = shared / "short_flight.tlog"
+            out = run_gcs("fly", "--config", SQUARE, "--scenario", SHORT, "--json",
+                          "--record", str(log))
+            assert out.returncode == 0, out.stdout + out.stderr
+            done.write_text(json.dumps([json.loads(out.stdout.splitlines()[-1]), str(log)]))
+        metrics, log_path = json.loads(done.read_text())
+    return metrics, Path(log_path)
