@@ -80,6 +80,10 @@ LINK_DELAY_CAP_S = 0.25
 """Largest round trip the guidance's prediction horizon follows, s: beyond it no lead saves
 the paper's gains at 4 Hz (tests/test_link_delay.py)."""
 
+ROPE_LEAD_CARRIED_MIN = 0.5
+"""Least share of the payload's weight the thrusts must show on the ropes for the spin's rope
+lead to act (carried, it is near 1; on copters without a payload, 0.0)."""
+
 HELD_SETPOINT_S = 1.0
 """Longest a tick's acceleration setpoint is re-sent, s of the loop's clock; past it, a late
 loop's re-sends damp velocity only."""
@@ -682,6 +686,8 @@ class Runtime:
         saturated again; unchanged when neither."""
         lag = self.team.config.guidance.rope_lag
         omega = self.guidance.angular_rate(demand) if carrying else 0.0
+        if omega != 0.0 and lag > 0.0 and not self._ropes_pull(fleet):
+            omega = 0.0
         sharing = self.load_sharing
         rate = sharing.carried_rate if sharing is not None else 0.0
         if lag <= 0.0 or (omega == 0.0 and rate == 0.0):
@@ -703,6 +709,26 @@ class Runtime:
             lead += rope_turn_lead(pull_ned, omega, lag, mass)
         lim = self.team.config.limits
         return saturate(accel + lead, norm_max=lim.accel_norm, axis_max=lim.accel_axis)
+
+    def _ropes_pull(self, fleet: FleetState) -> bool:
+        """Whether the ropes carry the payload, as the spin's rope lead assumes: not when
+        every vehicle's fresh thrust says they carry under :data:`ROPE_LEAD_CARRIED_MIN` of
+        its weight. A payload left on the ground, or copters with none (SITL): the lead,
+        sized for the design's pulls and with no pull to cancel, spun four ArduCopter SITL
+        copters up to 1.4 rad/s against the commanded 0.4 until the team tore apart.
+        Unknown (no thrusts, or not fresh): assumed, as before there were thrusts."""
+        sharing = self.load_sharing
+        if sharing is None or fleet.thrust is None or fleet.thrust_age is None:
+            return True
+        if not np.all(fleet.thrust_age <= self.team.config.safety.stale_after):
+            return True
+        carried = sharing.carried(fleet.thrust, fleet.tilt)
+        if not carried < ROPE_LEAD_CARRIED_MIN:  # NaN: not known
+            return True
+        self._warn_once(("rope lead", 0), f"the ropes carry {max(carried, 0.0):.2f} of the "
+                        "payload's weight (from the vehicles' thrusts): the spin's rope lead "
+                        "(guidance.rope_lag) is off")
+        return False
 
     def _follow_link_delay(self) -> None:
         """The guidance predicts the distance errors half a period ahead, the hold's delay;
@@ -936,7 +962,8 @@ class Runtime:
             active.add(key)
             if key not in self._active_warnings:
                 self._event("warning", e.text)
-        self._active_warnings = {k for k in self._active_warnings if k[0] in ("send", "analysis")}
+        self._active_warnings = {k for k in self._active_warnings
+                                 if k[0] in ("send", "analysis", "rope lead")}
         self._active_warnings |= active
 
     def _warn_once(self, key: tuple[str, int], text: str) -> None:
