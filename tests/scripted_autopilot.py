@@ -35,11 +35,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as v20
 
 from gcs.config import LinkConfig, Team, TeamFrameConfig, load_team
 from gcs.link import Link, LinkManager
-from gcs.loop import Action, OperatorCommand, Phase, Runtime, WallClock
+from gcs.loop import Action, FleetState, OperatorCommand, Phase, Runtime, WallClock
 from gcs.loop._runtime import Event
 from gcs.testing import mavlink2_connection
 from gcs.transport import MavutilTransport
@@ -570,3 +571,17 @@ def peer_team(peers: Mapping[int, tuple[str, dict[str, Any]]], *,
             runtime.close()
             for peer in started.values():
                 peer.stop()
+
+
+def fleet_state(xy: Any, thrust: float, *, modes: tuple[str, ...] = ("GUIDED",) * 4,
+                altitude: float = 2.5) -> FleetState:
+    """A still, level, armed team at ``xy`` (n, 2) NED, all at ``altitude`` m, every
+    vehicle's collective thrust ``thrust``, everything just heard: the loop's view of a
+    moment, for its rules."""
+    n = len(xy)
+    p = np.column_stack((np.asarray(xy, dtype=float), np.full(n, -altitude)))
+    return FleetState(t=10.0, ids=tuple(range(1, n + 1)), p_ned=p, v_ned=np.zeros((n, 3)),
+                      yaw=np.zeros(n), tilt=np.zeros(n), age=np.zeros(n),
+                      heartbeat_age=np.zeros(n), armed=np.ones(n, dtype=bool),
+                      battery=np.full(n, 90.0), modes=modes, thrust=np.full(n, thrust),
+                      thrust_age=np.zeros(n))

@@ -98,6 +98,24 @@ def test_gcs_fly_flies_a_scenario_on_px4_links_on_the_wall_clock(px4_sitl: Path)
     assert 0.5 < m["real_time_factor"] <= 1.0  # the flight's clock is the wall clock
 
 
+def test_a_flight_failing_in_the_air_lands_the_team_before_gcs_fly_exits(
+        px4_sitl: Path) -> None:
+    """``gcs fly`` on real vehicles once exited at a failed step and left the team hovering
+    with no one streaming to it (four ArduCopter SITL copters, in GUIDED, until their own
+    failsafes): now it aborts the team, waits for it to land, and then says so."""
+    scenario = px4_sitl.parent / "failing.yaml"
+    scenario.write_text(yaml.safe_dump({"name": "failing", "steps": [
+        {"action": "arm"}, {"action": "takeoff"}, {"action": "lift", "timeout": 0.5}]}))
+    out = run_gcs("fly", "--config", str(px4_sitl), "--scenario", str(scenario), "--json")
+    assert out.returncode == 1, out.stdout + out.stderr
+    m = json.loads(out.stdout.splitlines()[-1])
+    assert m["error"].startswith("step 3 (action lift): still lifting after 0.5 s"), m["error"]
+    assert m["error"].endswith("; the team was aborted and is landed"), m["error"]
+    assert "the flight failed with the team in the air (lifting): holding, then landing it " \
+           "before exiting" in out.stderr, out.stderr
+    assert m["phases"][-3:] == ["aborting", "landing", "landed"], m["phases"]
+
+
 def test_team_connect_flies_px4_links_call_by_call_and_refuses_faults(px4_sitl: Path) -> None:
     with Team.connect(px4_sitl) as team:
         assert team.phase.text in ("connect", "ready")

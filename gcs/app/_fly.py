@@ -29,7 +29,7 @@ from gcs.app._simprocess import SimProcess, free_tcp_port
 from gcs.common import ConfigError
 from gcs.config import Team, seal_key, signing_line
 from gcs.flightlog import FlightMetrics
-from gcs.loop import GatedClock, RuntimeSnapshot
+from gcs.loop import Action, GatedClock, Phase, RuntimeSnapshot
 from gcs.transport import ZenohSettings
 from gcs.wire import Sealer, SimTruth, keys
 
@@ -41,6 +41,9 @@ CONTROL_ANSWER_S = 10.0
 
 REAL_PROFILES = frozenset({"px4", "ardupilot"})
 """The link profiles of real autopilots (and of their SITL)."""
+
+LAND_BEFORE_EXIT_S = 120.0
+"""Longest a failed flight on real vehicles waits for the team it aborted to land, s."""
 
 
 def flies_real_vehicles(team: Team) -> bool:
@@ -113,7 +116,8 @@ class HeadlessFlight:
         lockstep: acknowledge every tick of the simulator started here, or of the one
             joined if it was started with ``--lockstep`` (refused at once where that
             cannot be sound: :mod:`gcs.app._simjoin`).
-        say: gets the line on how the team is signed (the key is made before the sim).
+        say: gets the line on how the team is signed (the key is made before the sim),
+            and what a failed flight on real vehicles does before it ends.
         ready_timeout: longest wait for the simulator started here to come up, s.
     """
 
@@ -122,6 +126,7 @@ class HeadlessFlight:
                  lockstep: bool = True, say: Callable[[str], None] | None = None,
                  ready_timeout: float = 60.0, gusts: float | None = None) -> None:
         self.team = team
+        self._say = say if say is not None else (lambda _line: None)
         self.real = flies_real_vehicles(team)
         """The team's links reach real autopilots: wall clock, no simulator."""
         if self.real:
@@ -240,6 +245,30 @@ class HeadlessFlight:
         raise RuntimeError(f"the simulator did not answer a control message within "
                            f"{CONTROL_ANSWER_S:g} s")
 
+    def land_before_exit(self) -> str:
+        """After a flight that failed on real vehicles: the team, if in the air, is aborted
+        (held, then landed, as the ABORT button) and waited for, with the loop running,
+        before the GCS lets go of it. ``gcs fly`` once exited at the failure and left
+        four ArduCopter SITL copters hovering in GUIDED with no one streaming to them.
+        Returns what to add to the flight's error: how it ended."""
+        loop = self.app.loop
+        was = loop.phase
+        if not (self.real and was.airborne):
+            return ""
+        if was not in (Phase.ABORTING, Phase.LANDING):
+            loop.request(Action.ABORT)
+        self._say(f"the flight failed with the team in the air ({was.text}): "
+                  f"holding, then landing it before exiting (Ctrl-C to leave it to the "
+                  f"autopilots)")
+        deadline = time.monotonic() + LAND_BEFORE_EXIT_S
+        while loop.phase.airborne:
+            if time.monotonic() > deadline:
+                return (f"; the team was still {loop.phase.text} {LAND_BEFORE_EXIT_S:g} s "
+                        f"after it was aborted: left to the autopilots")
+            time.sleep(0.1)
+        self._say(f"the team is {loop.phase.text}")
+        return f"; the team was aborted and is {loop.phase.text}"
+
     def stop_playing(self) -> None:
         """Leave the lockstep: the loop goes on without waiting for the playing thread."""
         if self._player == threading.get_ident():  # the participant is the thread's own
@@ -322,7 +351,13 @@ def fly(team: Team, scenario: Scenario, *, speed: str | None = None,
             error = str(exc)
         except Exception as exc:  # the clock stopped, the sim died...
             error = f"{type(exc).__name__}: {exc}"
+        except KeyboardInterrupt:
+            if not flight.real:
+                raise
+            error = "interrupted (Ctrl-C)"
         flight.stop_playing()
+        if error is not None:
+            error += flight.land_before_exit()
         died = flight.simulator_exit()
         if died is not None:
             error = (error or "") + died

@@ -84,6 +84,10 @@ ROPE_LEAD_CARRIED_MIN = 0.5
 """Least share of the payload's weight the thrusts must show on the ropes for the spin's rope
 lead to act (carried, it is near 1; on copters without a payload, 0.0)."""
 
+COMING_DOWN_DROP_M = 0.5
+"""How far below the team's median altitude a vehicle out of its streaming mode counts as
+coming down on its own, m (the load-sharing trims move a vehicle a few cm)."""
+
 HELD_SETPOINT_S = 1.0
 """Longest a tick's acceleration setpoint is re-sent, s of the loop's clock; past it, a late
 loop's re-sends damp velocity only."""
@@ -474,9 +478,20 @@ class Runtime:
                                 f"{self.profiles[vid].streaming_mode}")
 
     def _coming_down(self, fleet: FleetState) -> np.ndarray:
-        """(n,) True where a vehicle is disarmed or in one of its profile's landing modes."""
-        return ~fleet.armed | np.array([m in landing for m, landing in zip(
+        """(n,) True where a vehicle is disarmed, in one of its profile's landing modes, or
+        out of its streaming mode and more than :data:`COMING_DOWN_DROP_M` below the
+        team's median altitude. The last: a mode whose descent is the pilot's (ArduCopter
+        SITL switched to LOITER by MAVProxy, with no transmitter's throttle, fell to the
+        ground), which the team holding above it learnt of only when it disarmed 12 s
+        later."""
+        down = ~fleet.armed | np.array([m in landing for m, landing in zip(
             fleet.modes, self._landing_modes, strict=True)], dtype=bool)
+        alt = -fleet.p_ned[:, 2]
+        if np.count_nonzero(np.isfinite(alt)) >= 2:
+            out = np.array([m != want for m, want in zip(
+                fleet.modes, self._streaming_modes, strict=True)], dtype=bool)
+            down |= out & (alt < float(np.nanmedian(alt)) - COMING_DOWN_DROP_M)
+        return down
 
     def _takeoff(self) -> None:
         cfg = self.team.config.flight
