@@ -8,6 +8,7 @@ expected sequence, which the tests then require to be empty.
 
 from __future__ import annotations
 
+import itertools
 import logging
 import math
 import re
@@ -24,7 +25,7 @@ from gcs.config import LinkConfig
 from gcs.link import CommandError, Link, LinkError, LinkManager
 from gcs.link._link import DEFAULT_TELEMETRY_RATES_HZ
 from gcs.link._profile_ardupilot import ArduPilotProfile
-from gcs.link._profile_px4 import Px4Profile
+from gcs.link._profile_px4 import HOLD_ACCEL_MAX, Px4Profile, hold_accel
 from gcs.link._profile_sim import SimProfile
 from gcs.testing import team_key
 from gcs.transport import MavutilTransport
@@ -86,6 +87,43 @@ def test_px4_streams_a_second_of_setpoints_then_offboard_then_arm(udp_link: Link
     assert all(r.msg.type_mask == MASK_ACCEL_XY_POS_Z for r in setpoints)
     assert all(math.isclose(r.msg.z, -1.5) for r in setpoints)
     assert any(math.isclose(r.msg.afx, 0.3, abs_tol=1e-6) for r in setpoints)
+
+
+def test_px4_takeoff_stream_lasts_while_the_climb_is_waited_for_and_ends_after(
+        udp_link: Link) -> None:
+    """Four PX4 SIH quads took 6 s to climb to the take-off height; the take-off's stream,
+    a bridge of ``handover_s`` (5 s), ran out first and PX4's offboard-loss failsafe sent
+    them to RTL. The GCS waiting for the climb keeps it going; once it stops asking, the
+    stream ends within ``handover_s`` (a GCS that hung does not stream for ever)."""
+    peer = start_peer(udp_link, "px4")
+    try:
+        profile = Px4Profile(udp_link, handover_s=0.5)
+        profile.takeoff(altitude_m=1.0)
+        climbing_until = time.monotonic() + 1.5  # three bridges long
+        while time.monotonic() < climbing_until:
+            profile.keep_climbing()
+            time.sleep(0.05)
+        asked_last = time.monotonic()
+        time.sleep(1.5)
+    finally:
+        peer.stop()
+    assert peer.violations == []
+    armed = peer.commands(ARM)[0].t
+    times = [r.t for r in peer.setpoints() if r.t > armed]
+    assert max(b - a for a, b in itertools.pairwise(times + [asked_last])) < 0.4, times
+    assert asked_last + 0.3 < times[-1] < asked_last + 0.5 + 0.3  # then for handover_s
+
+
+def test_px4_hold_stream_pulls_back_to_where_it_began_and_damps_the_drift() -> None:
+    """Zero acceleration kept a drifting vehicle drifting (PX4 SIH: 2.8 m in a 15 s climb)."""
+    assert hold_accel((0.0, 0.0), (0.0, 0.0), (0.0, 0.0)) == (0.0, 0.0)
+    ax, ay = hold_accel((0.0, 0.0), (0.3, -0.2), (0.0, 0.0))  # drifting: braked
+    assert ax < 0.0 < ay and math.isclose(ax, -0.3) and math.isclose(ay, 0.2)
+    ax, ay = hold_accel((1.0, -2.0), (0.0, 0.0), (0.0, 0.0))  # away: pulled back
+    assert ax < 0.0 < ay and math.isclose(ay / ax, -2.0)
+    far = hold_accel((40.0, 30.0), (0.0, 0.0), (0.0, 0.0))
+    assert math.isclose(math.hypot(*far), HOLD_ACCEL_MAX)
+    assert hold_accel((math.nan, 0.0), (0.0, 0.0), (0.0, 0.0)) == (0.0, 0.0)
 
 
 def test_px4_refuses_offboard_without_setpoint_stream(udp_link: Link) -> None:

@@ -119,6 +119,11 @@ class AutopilotProfile(Protocol):
         """
         ...
 
+    def keep_climbing(self) -> None:
+        """Called while the caller waits for a take-off to reach its altitude, before its
+        own setpoints: whatever the profile streams for the take-off goes on."""
+        ...
+
     @property
     def vertical_is_z(self) -> bool:
         """Whether :meth:`vertical_setpoint` is ``z_ned`` itself and does nothing else: the
@@ -206,6 +211,10 @@ class ProfileBase:
     def link(self) -> Link:
         """The vehicle's link."""
         return self._link
+
+    def keep_climbing(self) -> None:
+        """Nothing: the autopilot climbs on its own command (NAV_TAKEOFF, a simulated
+        vehicle's climb)."""
 
     def send_setpoint(self, *, accel_xy_ned: tuple[float, float], z_ned: float) -> None:
         """Horizontal acceleration plus the profile's vertical channel for ``z_ned``."""

@@ -8,14 +8,16 @@ custom main mode OFFBOARD (6). The helper keeps streaming until the caller's
 first own setpoint (hand-over), or at most ``handover_s``: if the GCS loop
 never takes over, the stream stops and PX4's offboard-loss failsafe acts.
 
-Take-off: warm-up stream of (a_xy = 0, z = current z - altitude), OFFBOARD,
-arm: PX4 climbs to the streamed z. Setpoints are x/y acceleration + z
-position. Land: MAV_CMD_NAV_LAND (AUTO.LAND). Tilt limit: ``MPC_TILTMAX_AIR``
-(degrees); integer parameters travel byte for byte.
+Take-off: warm-up stream of (z = current z - altitude, a_xy holding the
+vehicle where the stream began), OFFBOARD, arm: PX4 climbs to the streamed z.
+Setpoints are x/y acceleration + z position. Land: MAV_CMD_NAV_LAND
+(AUTO.LAND). Tilt limit: ``MPC_TILTMAX_AIR`` (degrees); integer parameters
+travel byte for byte.
 """
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 
@@ -36,12 +38,43 @@ from gcs.wire import (
 __all__ = ["Px4Profile"]
 
 
+HOLD_KP, HOLD_KV = 0.25, 1.0
+"""Gains of the hold stream's pull back to where it began, 1/s^2 and 1/s (critically damped,
+the GCS loop's own hold's)."""
+
+HOLD_ACCEL_MAX = 1.0
+"""Largest horizontal acceleration the hold stream asks for, m/s^2."""
+
+HOLD_FRESH_S = 0.5
+"""Oldest LOCAL_POSITION_NED the hold stream steers by, s; older: zero acceleration."""
+
+
+def hold_accel(p_xy: tuple[float, float], v_xy: tuple[float, float],
+               hold_xy: tuple[float, float]) -> tuple[float, float]:
+    """The horizontal acceleration that holds a vehicle at ``hold_xy`` (NED, m) from its
+    position and velocity, at most :data:`HOLD_ACCEL_MAX`. Zero acceleration (the stream's
+    first) is no hold: it keeps whatever velocity the vehicle has, and four PX4 SIH quads
+    drifted up to 2.8 m apart in a 15 s climb."""
+    ax = -HOLD_KV * v_xy[0] - HOLD_KP * (p_xy[0] - hold_xy[0])
+    ay = -HOLD_KV * v_xy[1] - HOLD_KP * (p_xy[1] - hold_xy[1])
+    norm = math.hypot(ax, ay)
+    if not math.isfinite(norm):
+        return 0.0, 0.0
+    if norm > HOLD_ACCEL_MAX:
+        ax, ay = ax * HOLD_ACCEL_MAX / norm, ay * HOLD_ACCEL_MAX / norm
+    return ax, ay
+
+
 class _HoldStream:
-    """Streams one hold setpoint from a thread until stopped or past its deadline."""
+    """Streams a hold setpoint from a thread until stopped or past its deadline: ``z_ned``,
+    and the horizontal position where it began, held by acceleration
+    (:func:`hold_accel`)."""
 
     def __init__(self, link: Link, *, z_ned: float, rate_hz: float) -> None:
         self._link = link
         self._z_ned = z_ned
+        position = link.telemetry.position
+        self._hold_xy = None if position is None else (position.p_ned[0], position.p_ned[1])
         self._period = 1.0 / rate_hz
         self._deadline = float("inf")
         self._stop = threading.Event()
@@ -57,10 +90,19 @@ class _HoldStream:
     def _run(self) -> None:
         while not self._stop.is_set() and time.monotonic() < self._deadline:
             try:
-                self._link.send_setpoint(accel_xy_ned=(0.0, 0.0), z_ned=self._z_ned)
+                self._link.send_setpoint(accel_xy_ned=self._accel(), z_ned=self._z_ned)
             except LinkError:
                 return  # link closed
             self._stop.wait(self._period)
+
+    def _accel(self) -> tuple[float, float]:
+        position = self._link.telemetry.position
+        if position is None or self._link.clock() - position.received_at > HOLD_FRESH_S:
+            return 0.0, 0.0
+        p, v = position.p_ned, position.v_ned
+        if self._hold_xy is None:
+            self._hold_xy = (p[0], p[1])
+        return hold_accel((p[0], p[1]), (v[0], v[1]), self._hold_xy)
 
     def stop(self) -> None:
         self._stop.set()
@@ -132,6 +174,12 @@ class Px4Profile(ProfileBase):
         except Exception:
             self._stop_stream()
             raise
+        self._hand_over()
+
+    def keep_climbing(self) -> None:
+        """The take-off's stream goes on for another ``handover_s``: a climb slower than
+        that (four PX4 SIH quads took 6 s to 0.9 m) lost its stream and went to RTL on
+        PX4's offboard-loss failsafe before the GCS loop took over."""
         self._hand_over()
 
     def vertical_setpoint(self, z_ned: float) -> float:

@@ -512,6 +512,8 @@ class Runtime:
                        if not abs(a - h0) < cfg.altitude_tolerance]
                 raise RuntimeError(f"vehicles {low} did not reach {h0:.2f} m in "
                                    f"{cfg.takeoff_timeout:g} s")
+            for profile in self._profile_list:
+                profile.keep_climbing()
             if not self.gate.pause():
                 time.sleep(0.02)
         self.operator.reset_altitude(h0, now=self.clock.now())
