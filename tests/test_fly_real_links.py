@@ -25,6 +25,7 @@ import yaml
 from gcs.app import SimProcess, free_tcp_port
 from gcs.app._simprocess import SimStartError
 from gcs.common import ConfigError
+from gcs.flightlog import FlightLog
 from gcs.testing import SimulatorOnlyError, Team
 from tests.conftest import SQUARE, run_gcs
 from tests.test_simhost_udp import free_udp_ports
@@ -114,6 +115,19 @@ def test_a_flight_failing_in_the_air_lands_the_team_before_gcs_fly_exits(
     assert "the flight failed with the team in the air (lifting): holding, then landing it " \
            "before exiting" in out.stderr, out.stderr
     assert m["phases"][-3:] == ["aborting", "landing", "landed"], m["phases"]
+
+
+def test_a_team_connected_and_closed_in_the_air_is_landed_first(px4_sitl: Path,
+                                                                 tmp_path: Path) -> None:
+    """A test on real vehicles that fails (or forgets to land) closes its Team in the air:
+    the GCS lands the team before it lets go of it."""
+    log = tmp_path / "closed.tlog"
+    with Team.connect(px4_sitl, record=log) as team:
+        team.arm()
+        team.takeoff()
+        assert team.phase.text == "hover"
+    changes = [phase for _t, phase in FlightLog.load(log).phase_changes()]
+    assert changes[-3:] == ["aborting", "landing", "landed"], changes
 
 
 def test_team_connect_flies_px4_links_call_by_call_and_refuses_faults(px4_sitl: Path) -> None:

@@ -245,19 +245,19 @@ class HeadlessFlight:
         raise RuntimeError(f"the simulator did not answer a control message within "
                            f"{CONTROL_ANSWER_S:g} s")
 
-    def land_before_exit(self) -> str:
-        """After a flight that failed on real vehicles: the team, if in the air, is aborted
-        (held, then landed, as the ABORT button) and waited for, with the loop running,
-        before the GCS lets go of it. ``gcs fly`` once exited at the failure and left
-        four ArduCopter SITL copters hovering in GUIDED with no one streaming to them.
-        Returns what to add to the flight's error: how it ended."""
+    def land_before_exit(self, why: str = "the flight failed") -> str:
+        """After a flight that failed on real vehicles (``why``: what ended it): the team,
+        if in the air, is aborted (held, then landed, as the ABORT button) and waited for,
+        with the loop running, before the GCS lets go of it. ``gcs fly`` once exited at
+        the failure and left four ArduCopter SITL copters hovering in GUIDED with no one
+        streaming to them. Returns what to add to the flight's error: how it ended."""
         loop = self.app.loop
         was = loop.phase
         if not (self.real and was.airborne):
             return ""
         if was not in (Phase.ABORTING, Phase.LANDING):
             loop.request(Action.ABORT)
-        self._say(f"the flight failed with the team in the air ({was.text}): "
+        self._say(f"{why} with the team in the air ({was.text}): "
                   f"holding, then landing it before exiting (Ctrl-C to leave it to the "
                   f"autopilots)")
         deadline = time.monotonic() + LAND_BEFORE_EXIT_S

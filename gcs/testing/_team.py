@@ -291,8 +291,16 @@ class Team:
     # -- closing --------------------------------------------------------------------------
 
     def close(self) -> None:
-        """Stop the GCS (and a simulator started for it) and close their ports; idempotent."""
-        self._finalizer()
+        """Stop the GCS (and a simulator started for it) and close their ports; idempotent.
+
+        Real vehicles still in the air (a test that failed, or forgot to land) are
+        aborted and landed first (up to 120 s, as ``gcs fly`` does after a failed
+        flight): the GCS never lets go of a flying team."""
+        if self._finalizer.alive:
+            try:
+                self._flight.land_before_exit("closed")
+            finally:
+                self._finalizer()
 
     def __enter__(self) -> Team:
         return self
