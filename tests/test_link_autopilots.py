@@ -110,8 +110,9 @@ def test_px4_takeoff_stream_lasts_while_the_climb_is_waited_for_and_ends_after(
     assert peer.violations == []
     armed = peer.commands(ARM)[0].t
     times = [r.t for r in peer.setpoints() if r.t > armed]
-    assert max(b - a for a, b in itertools.pairwise(times + [asked_last])) < 0.4, times
-    assert asked_last + 0.3 < times[-1] < asked_last + 0.5 + 0.3  # then for handover_s
+    # 10 Hz; without keep_climbing the stream stopped 0.5 s in and the gap was 1.06 s
+    assert max(b - a for a, b in itertools.pairwise(times + [asked_last])) < 0.7, times
+    assert asked_last + 0.3 < times[-1] < asked_last + 1.1  # then handover_s, not 1.5 s
 
 
 def test_px4_hold_stream_pulls_back_to_where_it_began_and_damps_the_drift() -> None:

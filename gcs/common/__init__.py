@@ -9,6 +9,8 @@ Modules:
 
     ``_gravity``       Standard gravity: the one value the simulator, the airframe checks and
                        the analysis share.
+    ``_hold``          The gains of a hold by acceleration, shared by the loop and the PX4
+                       take-off stream.
     ``_jit_cache``     Compiled kernels whose numba disk cache stays honest across files.
     ``_lazy``          Public modules of a package that load on first use, not with the
                        package.
@@ -20,6 +22,7 @@ Modules:
 """
 
 from gcs.common._gravity import STANDARD_GRAVITY
+from gcs.common._hold import HOLD_KP, HOLD_KV
 from gcs.common._jit_cache import kernel
 from gcs.common._lazy import lazy_modules
 from gcs.common._shipped import LOCAL_CONFIGS, default_config, shipped_config
@@ -28,6 +31,8 @@ from gcs.common._threads import join_thread
 from gcs.common._typed_config import ConfigError, FieldError, field, from_mapping, load_yaml
 
 __all__ = [
+    "HOLD_KP",
+    "HOLD_KV",
     "LOCAL_CONFIGS",
     "STANDARD_GRAVITY",
     "ConfigError",

@@ -21,7 +21,7 @@ import math
 import threading
 import time
 
-from gcs.common import join_thread
+from gcs.common import HOLD_KP, HOLD_KV, join_thread
 from gcs.link._errors import LinkError
 from gcs.link._link import Link
 from gcs.link._profile import REAL_AUTOPILOT_RATES_HZ, ProfileBase, ProfileName
@@ -37,10 +37,6 @@ from gcs.wire import (
 
 __all__ = ["Px4Profile"]
 
-
-HOLD_KP, HOLD_KV = 0.25, 1.0
-"""Gains of the hold stream's pull back to where it began, 1/s^2 and 1/s (critically damped,
-the GCS loop's own hold's)."""
 
 HOLD_ACCEL_MAX = 1.0
 """Largest horizontal acceleration the hold stream asks for, m/s^2."""

@@ -43,6 +43,7 @@ from typing import Protocol
 import numpy as np
 
 from gcs.analysis import Analysis, NoHangingPointError, a_safe_span, analyze, desired_load
+from gcs.common import HOLD_KP, HOLD_KV
 from gcs.config import Team
 from gcs.formation import fit_rotation
 from gcs.guidance import (
@@ -71,10 +72,6 @@ from gcs.wire import SETPOINT_MESSAGE, SetpointPacker, SimTruth, StatusText, Tel
 
 __all__ = ["HELD_SETPOINT_S", "HOLD_KP", "HOLD_KV", "LINK_DELAY_CAP_S", "Event",
            "FlightRecorder", "Runtime", "RuntimeSnapshot", "TickStats"]
-
-HOLD_KP, HOLD_KV = 0.25, 1.0
-"""Gains of a held team's pull back to each vehicle's own point, 1/s^2 and 1/s (critically
-damped, slow beside the 4 Hz tick)."""
 
 LINK_DELAY_CAP_S = 0.25
 """Largest round trip the guidance's prediction horizon follows, s: beyond it no lead saves
