@@ -263,6 +263,7 @@ class Runtime:
         self._lock = threading.Lock()
         self._events: collections.deque[Event] = collections.deque(maxlen=200)
         self._active_warnings: set[tuple[str, int]] = set()
+        self._latched: set[tuple[str, int]] = set()  # _warn_once's, until _unlatch
         self._modes: dict[int, str] = {}
         self._modes_seen: tuple[str, ...] | None = None
         self.errors = 0
@@ -614,6 +615,8 @@ class Runtime:
         if not self.gate.window():
             self._warn_once(("gate", 0), "lockstep: a phase action was still busy "
                                          f"{HOLD_CAP_S:g} s after the tick; the sim went on")
+        else:
+            self._unlatch(("gate", 0))
         for listener in self._listeners:
             try:
                 listener(snap)
@@ -683,6 +686,7 @@ class Runtime:
         if phase not in _CARRYING:
             return
         if fresh:
+            self._unlatch(("load sharing", 0))
             sharing.update(dt, fleet.thrust, fleet.tilt)
             return
         silent = [vid for vid, age in zip(self.ids, fleet.thrust_age, strict=True)
@@ -837,6 +841,8 @@ class Runtime:
                           in_shape=fresh and fleet.located and not verdict.hold):
             self._warn_once(("jump", 0), "a vehicle's position jumped: a deformation from "
                                          "here on is held, not re-formed")
+        else:
+            self._unlatch(("jump", 0))
         before = self._shape
         shape = policy.update(now, deformed=verdict.hold, deformation=verdict.deformation, p_xy=p)
         if shape is Deformation.LAND and phase.airborne \
@@ -976,14 +982,19 @@ class Runtime:
             active.add(key)
             if key not in self._active_warnings:
                 self._event("warning", e.text)
-        self._active_warnings = {k for k in self._active_warnings
-                                 if k[0] in ("send", "analysis", "rope lead")}
-        self._active_warnings |= active
+        self._active_warnings = active
 
     def _warn_once(self, key: tuple[str, int], text: str) -> None:
-        if key not in self._active_warnings:
-            self._active_warnings.add(key)
+        """Say ``text`` once for a condition that may hold tick after tick; again only
+        after :meth:`_unlatch` (the condition cleared). Some are never unlatched: a
+        setpoint that cannot be sent, the analysis, the rope lead turned off."""
+        if key not in self._latched:
+            self._latched.add(key)
             self._event("warning", text)
+
+    def _unlatch(self, key: tuple[str, int]) -> None:
+        """The condition behind ``key`` cleared: its next occurrence is said again."""
+        self._latched.discard(key)
 
     def stats(self) -> TickStats:
         """Loop timing over the recent ticks."""
@@ -1060,6 +1071,8 @@ class Runtime:
                 self._warn_once(("resend", 0), f"setpoint re-send failed: "
                                                f"{type(exc).__name__}: {exc}")
                 sent = False
+            else:
+                self._unlatch(("resend", 0))
             if not sent:
                 done.wait(slot)
 
