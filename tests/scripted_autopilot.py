@@ -90,7 +90,8 @@ class ScriptedAutopilot(threading.Thread):
                  position_rate_hz: float = 20.0, flies: bool = False, sysid: int = VEHICLE,
                  xy: tuple[float, float] = (0.0, 0.0), origin: Geo | None = None,
                  gps: bool = False, reports_origin: bool = True,
-                 tilt_limit: float | None = None, auto_disarm_s: float | None = None) -> None:
+                 tilt_limit: float | None = None, auto_disarm_s: float | None = None,
+                 altitude_wander: float = 0.0) -> None:
         super().__init__(daemon=True, name=f"scripted-{kind}-{sysid}")
         self.kind = kind
         self.sysid = sysid
@@ -136,6 +137,10 @@ class ScriptedAutopilot(threading.Thread):
         self.auto_disarm_s = auto_disarm_s
         """ArduPilot: disarm on its own this long after arming without a take-off."""
         self._armed_at: float | None = None
+        self.altitude_wander = altitude_wander
+        """In the air, the reported altitude off its true one by this much, m, except in
+        its own half second of every two (system ids 1-4 by turns: never all four there
+        at once), as GPS altitudes wander (PX4 SIH: +-0.15 m)."""
 
     # -- test-side queries ------------------------------------------------------------------
 
@@ -210,16 +215,19 @@ class ScriptedAutopilot(threading.Thread):
     def _position(self) -> None:
         t_ms = int(time.monotonic() * 1000) & 0xFFFFFFFF
         north, east = self.xy
-        self.conn.mav.local_position_ned_send(t_ms, north, east, self.z_ned, 0.0, 0.0,
-                                              self.vz_ned)
+        z = self.z_ned
+        if self.altitude_wander and z < 0.0 \
+                and int(time.monotonic() * 2.0) % 4 != (self.sysid - 1) % 4:
+            z -= self.altitude_wander
+        self.conn.mav.local_position_ned_send(t_ms, north, east, z, 0.0, 0.0, self.vz_ned)
         # the collective thrust of a level hover, as PX4 and ArduCopter send it
         self.conn.mav.attitude_target_send(t_ms, 0, (1.0, 0.0, 0.0, 0.0), 0.0, 0.0, 0.0,
                                            HOVER_THRUST)
         if self.gps and self.origin is not None:
-            here = moved(self.origin, north, east, self.z_ned)
+            here = moved(self.origin, north, east, z)
             self.conn.mav.global_position_int_send(
                 t_ms, round(here.lat * 1e7), round(here.lon * 1e7), round(here.alt * 1000),
-                round(-self.z_ned * 1000), 0, 0, round(self.vz_ned * 100), 0)
+                round(-z * 1000), 0, 0, round(self.vz_ned * 100), 0)
 
     def _send_origin(self) -> None:
         if self.origin is not None:
@@ -404,6 +412,8 @@ class ScriptedAutopilot(threading.Thread):
             if msg.type_mask != MASK_ACCEL:
                 self._violation(f"type_mask {msg.type_mask} is not acceleration only")
             self._afz = (time.monotonic(), msg.afz)
+        elif self.kind == "px4" and self.armed and self._offboard_since is not None:
+            self.z_ned = msg.z  # at the streamed altitude at once
 
     def _check_offboard_stream(self) -> None:
         if self.kind != "px4" or self._offboard_since is None:

@@ -19,6 +19,8 @@ Modules:
                    Hz loop.
     ``_phases``    Flight phases of a transport and which operator action leads where.
     ``_prearm``    Checks before arming: every refusal names the vehicle and the reason.
+    ``_reached``   An altitude reached: each vehicle counted once it has been within
+                   tolerance of it.
     ``_recovery``  Recovery after a setpoint gap: when vehicles that dropped to hold fly
                    again.
     ``_runtime``   The GCS loop: operator sticks in, one acceleration setpoint per vehicle

@@ -64,6 +64,7 @@ from gcs.loop._load_share import LoadSharing
 from gcs.loop._operator import OperatorCommand, OperatorSnapshot
 from gcs.loop._phases import Action, Phase, PhaseError, next_phase
 from gcs.loop._prearm import Prearm, PrearmError
+from gcs.loop._reached import AltitudeReached
 from gcs.loop._recovery import Recovery
 from gcs.loop._safety import SafetyVerdict, evaluate
 from gcs.loop._stepgate import HOLD_CAP_S, StepGate
@@ -264,6 +265,8 @@ class Runtime:
         self._events: collections.deque[Event] = collections.deque(maxlen=200)
         self._active_warnings: set[tuple[str, int]] = set()
         self._latched: set[tuple[str, int]] = set()  # _warn_once's, until _unlatch
+        self._reached = AltitudeReached()  # the lift's or the set-down's altitude
+        self._reached_in: Phase | None = None
         self._modes: dict[int, str] = {}
         self._modes_seen: tuple[str, ...] | None = None
         self.errors = 0
@@ -498,16 +501,15 @@ class Runtime:
         h0 = self.taut_altitude(scale) - cfg.takeoff_slack
         self._for_all("take off", lambda p: p.takeoff(altitude_m=h0))
         deadline = time.monotonic() + cfg.takeoff_timeout
+        reached = AltitudeReached()
         while True:
             fleet = self.fleet_table.read(self.clock.now())
-            alt = -fleet.p_ned[:, 2]
-            if np.all(np.abs(alt - h0) < cfg.altitude_tolerance):
+            if reached.update(-fleet.p_ned[:, 2], h0, cfg.altitude_tolerance):
                 break
             if self.phase is not Phase.TAKING_OFF:
                 return  # aborted meanwhile
             if time.monotonic() > deadline:
-                low = [vid for vid, a in zip(self.ids, alt, strict=True)
-                       if not abs(a - h0) < cfg.altitude_tolerance]
+                low = [vid for vid, m in zip(self.ids, reached.missing(), strict=True) if m]
                 raise RuntimeError(f"vehicles {low} did not reach {h0:.2f} m in "
                                    f"{cfg.takeoff_timeout:g} s")
             for profile in self._profile_list:
@@ -941,8 +943,11 @@ class Runtime:
         # The ramp's end and the team's own altitude: a team held up (vehicles in hold
         # after a gap) has not lifted or set down its payload when the ramp ends.
         target = min(op.altitude_target, self.team.config.safety.geofence_altitude)
-        there = bool(np.all(np.abs(-fleet.p_ned[:, 2] - target)
-                            < self.team.config.flight.altitude_tolerance))
+        if phase is not self._reached_in:
+            self._reached_in = phase
+            self._reached.reset()
+        there = self._reached.update(-fleet.p_ned[:, 2], target,
+                                     self.team.config.flight.altitude_tolerance)
         reached = abs(op.altitude - op.altitude_target) < 1e-6 and there
         if phase is Phase.LIFTING and reached:
             self._set_phase(Phase.FORMATION)
