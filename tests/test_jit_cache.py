@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
+from gcs.common import _jit_cache
 from gcs.common._jit_cache import kernel_sources, refresh_numba_cache
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -72,3 +74,39 @@ def test_the_project_trees_fingerprint_what_their_kernels_compile_in() -> None:
     assert "gcs/guidance/_udi.py" in gcs and "gcs/wire/_stamp.py" in gcs
     assert not [p for p in vehicles | sim if p.startswith(("gcs/link/", "gcs/loop/"))]
     assert "gcs/link/_manager.py" not in gcs and "gcs/loop/_runtime.py" not in gcs
+
+
+def test_an_untouched_tree_is_not_read_again_and_an_edit_is(tmp_path: Path,
+                                                             monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """The full check parses every source (about 0.3 s in each simulator and GCS process);
+    with no module file touched since, a stat of each is enough."""
+    root = _tree(tmp_path)
+    monkeypatch.setattr(_jit_cache, "_SETTLED_S", 0.0)  # as if written long ago
+    refresh_numba_cache(root, [root])
+    files = _stale_files(root)
+    read = []
+    real = _jit_cache.kernel_sources
+    monkeypatch.setattr(_jit_cache, "kernel_sources",
+                        lambda *a: read.append(1) or real(*a))  # type: ignore[func-returns-value]
+    refresh_numba_cache(root, [root])
+    assert read == [] and all(f.exists() for f in files)
+    # an edit of the same size, its time set back to the old one: the inode's change
+    # time still tells
+    gain = root / "sub" / "_gain.py"
+    before = gain.stat()
+    gain.write_text("GAIN = 3.0\n")
+    os.utime(gain, ns=(before.st_atime_ns, before.st_mtime_ns))
+    refresh_numba_cache(root, [root])
+    assert read == [1] and not any(f.exists() for f in files)
+
+
+def test_a_tree_edited_just_now_is_read_on_every_check(tmp_path: Path,
+                                                        monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    root = _tree(tmp_path)  # written this instant: its stat cannot be trusted yet
+    read = []
+    real = _jit_cache.kernel_sources
+    monkeypatch.setattr(_jit_cache, "kernel_sources",
+                        lambda *a: read.append(1) or real(*a))  # type: ignore[func-returns-value]
+    refresh_numba_cache(root, [root])
+    refresh_numba_cache(root, [root])
+    assert read == [1, 1]

@@ -19,8 +19,10 @@ from __future__ import annotations
 import ast
 import hashlib
 import importlib.util
+import os
 import re
 import threading
+import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -31,6 +33,10 @@ from numba.core.caching import FunctionCache
 __all__ = ["kernel", "kernel_sources", "refresh_numba_cache"]
 
 _STAMP = "numba-sources.sha256"
+_STAT_STAMP = "numba-sources.stat"
+_SETTLED_S = 2.0
+"""A file modified more recently than this is not trusted by its stat alone: an edit
+within the file system's time-stamp tick could leave size and time unchanged."""
 _KERNEL = re.compile(r"^\s*@(?:\w+\.)*kernel\(", re.MULTILINE)
 
 #: The project's package trees: a kernel may compile in constants and functions from any.
@@ -111,8 +117,45 @@ def refresh_numba_cache(tree: Path, roots: Sequence[Path]) -> None:
 
     The cache files of every ``__pycache__`` in the tree go; the fingerprint is
     kept in the tree's top ``__pycache__``. Unwritable cache directories (numba
-    then caches elsewhere) are left alone.
+    then caches elsewhere) are left alone. Where no module file of the trees was
+    touched since the last check (the same sizes and times, none of them recent),
+    the sources are not read again.
     """
+    quick = tree / "__pycache__" / _STAT_STAMP
+    seen, newest = _stat_key([tree, *roots])
+    try:
+        if quick.read_text(encoding="ascii") == seen \
+                and (tree / "__pycache__" / _STAMP).is_file():
+            return  # no source file touched since the last full check
+    except OSError:
+        pass
+    if _fingerprint_check(tree, roots) and time.time() - newest > _SETTLED_S:
+        try:  # atomically: another process may be reading it
+            tmp = quick.with_suffix(f".{os.getpid()}.tmp")
+            tmp.write_text(seen, encoding="ascii")
+            os.replace(tmp, quick)
+        except OSError:
+            pass
+
+
+def _stat_key(roots: Sequence[Path]) -> tuple[str, float]:
+    """A digest of every module file's path, size and times under the package trees
+    ``roots``, and the newest modification time among them (s since the epoch). Reading
+    them costs a stat each; parsing them for :func:`kernel_sources`, about 0.3 s a
+    process."""
+    digest = hashlib.sha256()
+    newest = 0.0
+    for name, path in sorted(_module_files(roots).items()):
+        st = path.stat()
+        digest.update(f"{name}\0{path}\0{st.st_size}\0{st.st_mtime_ns}\0{st.st_ctime_ns}"
+                      f"\0{st.st_ino}\n".encode())
+        newest = max(newest, st.st_mtime, st.st_ctime)
+    return digest.hexdigest(), newest
+
+
+def _fingerprint_check(tree: Path, roots: Sequence[Path]) -> bool:
+    """The full check of :func:`refresh_numba_cache`; False where the cache directory
+    could not be written."""
     digest = hashlib.sha256()
     for path in kernel_sources(tree, roots):
         digest.update(f"{path.relative_to(path.parents[1])}\0".encode())
@@ -121,7 +164,7 @@ def refresh_numba_cache(tree: Path, roots: Sequence[Path]) -> None:
     stamp = tree / "__pycache__" / _STAMP
     try:
         if stamp.read_text(encoding="ascii") == fingerprint:
-            return
+            return True
     except OSError:
         pass
     try:
@@ -131,7 +174,8 @@ def refresh_numba_cache(tree: Path, roots: Sequence[Path]) -> None:
         stamp.parent.mkdir(exist_ok=True)
         stamp.write_text(fingerprint, encoding="ascii")
     except OSError:
-        return
+        return False
+    return True
 
 
 def _tree_dir(name: str) -> Path | None:
