@@ -32,7 +32,10 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
 
     team = load_team(args.config)
     result = analyze(team)
-    if args.verify and result.ok:
+    if args.verify and (result.ok or result.unchecked_only):
+        if not result.ok:
+            print(f"gcs analyze: {team.source}: {result.violations[0].message}",
+                  file=sys.stderr)
         return _verify(args, team, result)
     print(analysis_json(result) if args.json else format_report(result, team.source))
     return 0 if result.ok else 1
@@ -62,7 +65,15 @@ def _verify(args: argparse.Namespace, team: Team, analysis: Analysis) -> int:
     result = verify(team, scenario, analysis, seeds=seeds, jobs=jobs, gusts=gusts,
                     progress=lambda line: print(f"gcs analyze --verify: {line}",
                                                 file=sys.stderr, flush=True))
-    print(json.dumps(result.to_json()) if args.json else format_verify(result))
+    beyond = [v.term for v in analysis.violations]  # only the team's size (unchecked_only)
+    if args.json:
+        print(json.dumps({**result.to_json(), "analysis_refuses": beyond}))
+    else:
+        print(format_verify(result))
+        if beyond and result.ok:
+            print(f"these flights are the certificate of this team of {analysis.vehicles}, "
+                  f"beyond those the analysis is checked on: gcs fly, run and demo fly it "
+                  f"with --override-analysis")
     return 0 if result.ok else 1
 
 

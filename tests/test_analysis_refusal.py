@@ -49,3 +49,19 @@ def test_a_refused_team_is_not_flown(refused_team: Path, command: tuple[str, ...
     assert [line.strip() for line in lines[1:]] == [f"{v.term}: {v.message}" for v in violations]
     assert "signing" not in out.stderr and "starting" not in out.stdout  # nothing started
     assert elapsed < 60, elapsed  # not the 120 s of a flight that waits in "connect"
+
+
+def test_the_api_refuses_a_refused_team_before_starting_anything(refused_team: Path) -> None:
+    """``SimTeam`` (and ``Team.connect``) raise at once, every violation in the line, and
+    start no simulator: a test author's flight does not wait in "connect" to fail."""
+    from gcs.common import ConfigError
+    from gcs.testing import SimTeam
+
+    violations = analyze(load_team(refused_team)).violations
+    with pytest.raises(ConfigError) as refused:
+        SimTeam(refused_team)
+    said = str(refused.value)
+    assert said.startswith(f"{refused_team}: gcs analyze refuses this team "
+                           f"({len(violations)} violation(s); override_analysis flies it")
+    assert all(f"{v.term}: {v.message}" in said for v in violations)
+    assert "\n" not in said

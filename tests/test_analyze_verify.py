@@ -200,3 +200,27 @@ def test_rope_loads_split_a_pull_into_its_vertical_and_horizontal_parts() -> Non
     np.testing.assert_allclose(vertical, [[1.0, 2.0]])
     np.testing.assert_allclose(horizontal, [[1.0, 0.0]], atol=1e-12)
     np.testing.assert_allclose(reach, [[1.0, 0.0]])
+
+
+def test_a_team_beyond_the_checked_sizes_is_refused_and_certified_by_its_flights(
+        tmp_path: Path) -> None:
+    """A ring of twelve, tied across and carrying the 0.13 kg its worst share allows,
+    passes every condition but its size: the analysis alone refuses it, and --verify flies
+    it anyway, its flights being the certificate. They refute it: the ring comes 1.03 m
+    out of its shape against 0.785 m safe on the short flight (2.1 m on the paper's)."""
+    raw = yaml.safe_load(Path("tests/data/bebop_ring12_tied.yaml").read_text())
+    raw["airframe"] = str(Path("configs/airframes/bebop2.yaml").resolve())
+    raw["payload"]["mass"] = 0.13
+    team = tmp_path / "ring.yaml"
+    team.write_text(yaml.safe_dump(raw))
+    alone = run_gcs("analyze", str(team), "--json")
+    assert alone.returncode == 1
+    assert [v["term"] for v in json.loads(alone.stdout)["violations"]] == ["vehicles"]
+    out = run_gcs("analyze", str(team), "--verify", "--scenario", SHORT, "--seeds", "1",
+                  "--jobs", "1")
+    assert "a team of 12 is beyond the 6 vehicles" in out.stderr
+    assert "seed 1 completed" in out.stderr, out.stderr
+    assert out.returncode == 1, out.stdout
+    row = _rows(out.stdout)["distance error <= safe deformation"]
+    assert row["verdict"] == "EXCEEDED" and float(row["measured"]) > 0.9, out.stdout
+    assert "certificate" not in out.stdout

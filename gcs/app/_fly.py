@@ -23,6 +23,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from gcs.analysis import analyze
 from gcs.app._app import GcsApp
 from gcs.app._scenario import Scenario, ScenarioError, Step, play, play_step
 from gcs.app._simprocess import SimProcess, free_tcp_port
@@ -131,6 +132,8 @@ class HeadlessFlight:
         """The team's links reach real autopilots: wall clock, no simulator."""
         if self.real:
             _check_real(team, speed, connect)
+        if not override_analysis:
+            _refuse_unless_analysed(team)
         if gusts is not None and (self.real or connect is not None):
             where = (f"the links of {team.source} reach px4/ardupilot autopilots"
                      if self.real else f"the simulator joined at {connect} has its own "
@@ -318,6 +321,17 @@ class HeadlessFlight:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _refuse_unless_analysed(team: Team) -> None:
+    """A ConfigError listing every violation when ``gcs analyze`` refuses ``team``: at
+    once, before a simulator starts, not a flight that never gets ready."""
+    result = analyze(team)
+    if not result.ok:
+        listed = "; ".join(f"{v.term}: {v.message}" for v in result.violations)
+        raise ConfigError(team.source, "", f"gcs analyze refuses this team "
+                          f"({len(result.violations)} violation(s); override_analysis flies "
+                          f"it anyway): {listed}")
 
 
 def fly(team: Team, scenario: Scenario, *, speed: str | None = None,
