@@ -159,7 +159,7 @@ JSON_KEYS: dict[str, object] = {
                     "assumed_share": None, "worst_share": None, "worst_vehicle": None,
                     "position_error_m": None, "hold_stiffness_N_m": None,
                     "worst_tension_N": None, "worst_horizontal_N": None,
-                    "worst_vertical_load_N": None, "design_share": None,
+                    "worst_vertical_load_N": None, "design_share": None, "design_basis": None,
                     "even_rope_lengths_m": None, "accel_m_s2": None, "accel_share": None,
                     "accel_vehicle": None, "accel_tension_N": None},
     "largest_payload_kg": None,

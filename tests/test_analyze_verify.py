@@ -223,3 +223,38 @@ def test_a_team_beyond_the_checked_sizes_is_refused_and_certified_by_its_flights
     row = _rows(out.stdout)["distance error <= safe deformation"]
     assert row["verdict"] == "EXCEEDED" and float(row["measured"]) > 0.9, out.stdout
     assert "certificate" not in out.stdout
+
+
+def test_flights_within_the_analysis_certify_a_team_beyond_the_checked_sizes(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    """What `gcs analyze --verify` says when a team refused only for its size flies within
+    every figure (the flights replaced by one that exceeded nothing):
+    exit 0, the certificate line, and the refusal in the JSON."""
+    import argparse
+
+    from gcs import cli
+
+    raw = yaml.safe_load(Path("tests/data/bebop_ring12_tied.yaml").read_text())
+    raw["airframe"] = str(Path("configs/airframes/bebop2.yaml").resolve())
+    raw["payload"]["mass"] = 0.13
+    (tmp_path / "ring.yaml").write_text(yaml.safe_dump(raw))
+    team = load_team(tmp_path / "ring.yaml")
+    analysis = analyze(team)
+    assert analysis.unchecked_only
+    flight = FlightFigures(seed=1, completed=True, error=None, wall_s=1.0)
+
+    def flown(team_: object, scenario: object, analysis_: object, **_: object) -> VerifyResult:
+        return VerifyResult(team=team.config.name, scenario="short_flight", seeds=(1,),
+                            jobs=1, wall_s=1.0, flights=(flight,), rows=())
+
+    monkeypatch.setattr("gcs.app.verify", flown)
+    args = argparse.Namespace(scenario=SHORT, seeds="1", jobs="1", gusts=None, json=False)
+    assert cli._verify(args, team, analysis) == 0
+    out = capsys.readouterr().out
+    assert "result: OK" in out
+    assert "these flights are the certificate of this team of 12" in out
+    assert "with --override-analysis" in out
+    args.json = True
+    assert cli._verify(args, team, analysis) == 0
+    assert json.loads(capsys.readouterr().out)["analysis_refuses"] == ["vehicles"]

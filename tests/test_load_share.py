@@ -213,7 +213,7 @@ def test_load_sharing_keeps_the_square_within_its_design_share() -> None:
     alone = _worst_share(dataclasses.replace(
         unshared, config=dataclasses.replace(unshared.config, payload=payload)))
     assert shared < design - 0.02, shared  # 0.285 measured (0.304 at a gain of 0.1)
-    assert alone > design, alone  # 0.357 measured
+    assert alone > design, alone  # 0.79 measured (0.357 when it carried 0.55 kg)
 
 
 def test_without_load_sharing_the_analysis_designs_for_the_worst_share() -> None:

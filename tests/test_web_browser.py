@@ -117,9 +117,11 @@ class Demo:
         """The latest truth sample, waiting for one later than sim time ``after``.
 
         Truth is latest-wins (dropped under load), so a reader waits for a fresh one
-        rather than assume one arrived.
+        rather than assume one arrived. The wait allows the demo's simulator a tenth of
+        real time, as beside CPU hogs, plus 10 s.
         """
-        deadline = time.monotonic() + 10.0
+        ahead = after - self.truth.t if self.truth is not None else 0.0
+        deadline = time.monotonic() + 10.0 + 10.0 * max(ahead, 0.0)
         while self.truth is None or self.truth.t <= after:
             assert time.monotonic() < deadline, f"no sim truth after t = {after} s on zenoh"
             time.sleep(0.02)

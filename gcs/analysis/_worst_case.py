@@ -293,6 +293,7 @@ class Analysis:
                 "worst_horizontal_N": _num(ld.worst_horizontal),
                 "worst_vertical_load_N": _num(ld.worst_vertical_load),
                 "design_share": _num(ld.design_share),
+                "design_basis": ld.design_basis or None,
                 "even_rope_lengths_m": (None if ld.even_rope_lengths is None
                                         else nums(ld.even_rope_lengths)),
                 "accel_m_s2": _num(ld.accel),
@@ -740,8 +741,10 @@ def _settled_payload(team: Team, mass: float) -> float:
     vehicle more; without load sharing the paper's square was named 0.257 kg, which then
     failed eq. max, and 0.187 kg holds."""
     for _ in range(8):
+        if mass <= 0.0:
+            return 0.0
         again = _analyze(_with_payload(team, mass), settle=False)
-        if not any("payload.mass" in v.fixes for v in again.violations):
+        if again.largest_payload >= mass * (1.0 - 1e-6):  # it carries itself at its scales
             return mass
         mass = min(again.largest_payload, 0.99 * mass)
     return mass

@@ -328,7 +328,7 @@ def _refuse_unless_analysed(team: Team) -> None:
     once, before a simulator starts, not a flight that never gets ready."""
     result = analyze(team)
     if not result.ok:
-        listed = "; ".join(f"{v.term}: {v.message}" for v in result.violations)
+        listed = " | ".join(f"{v.term}: {v.message}" for v in result.violations)
         raise ConfigError(team.source, "", f"gcs analyze refuses this team "
                           f"({len(result.violations)} violation(s); override_analysis flies "
                           f"it anyway): {listed}")

@@ -672,6 +672,8 @@ class Runtime:
         cfg = self.team.config
         fresh = bool(np.all(fleet.thrust_age <= cfg.safety.stale_after)
                      and np.all(np.isfinite(fleet.thrust)) and np.all(np.isfinite(fleet.tilt)))
+        if fresh:  # heard again, in any phase: a later silence is said again
+            self._unlatch(("load sharing", 0))
         # the rate the ropes take the payload at, for the pickup's rope lead (not the
         # set-down's: the payload touching down is a step the lead came late for, and
         # pulled the square 0.07 m further in)
@@ -688,7 +690,6 @@ class Runtime:
         if phase not in _CARRYING:
             return
         if fresh:
-            self._unlatch(("load sharing", 0))
             sharing.update(dt, fleet.thrust, fleet.tilt)
             return
         silent = [vid for vid, age in zip(self.ids, fleet.thrust_age, strict=True)
