@@ -36,6 +36,11 @@ def _with_flight(team: Team, **changes: object) -> Team:
     return dataclasses.replace(team, config=dataclasses.replace(team.config, flight=flight))
 
 
+def _with_payload(team: Team, mass: float) -> Team:
+    payload = dataclasses.replace(team.config.payload, mass=mass)
+    return dataclasses.replace(team, config=dataclasses.replace(team.config, payload=payload))
+
+
 @pytest.mark.parametrize("config", [SQUARE, HEXAGON])
 def test_the_free_split_moves_load_without_moving_the_total_or_the_moments(config: str) -> None:
     xy = load_team(config).formation.positions
@@ -207,11 +212,8 @@ def test_load_sharing_keeps_the_square_within_its_design_share() -> None:
     design = 1.0 / 3.0  # the paper's 1/(n-1), what the analysis designs the square for
     shared = _worst_share(team)
     # without load sharing the analysis designs for the worst share: the square carries
-    # the 0.188 kg that leaves it (named), and its ropes split that as they split any weight
-    unshared = _with_flight(team, load_sharing=False)
-    payload = dataclasses.replace(team.config.payload, mass=0.18)
-    alone = _worst_share(dataclasses.replace(
-        unshared, config=dataclasses.replace(unshared.config, payload=payload)))
+    # the 0.18 kg that leaves it (0.187 kg named)
+    alone = _worst_share(_with_payload(_with_flight(team, load_sharing=False), 0.18))
     assert shared < design - 0.02, shared  # 0.285 measured (0.304 at a gain of 0.1)
     assert alone > design, alone  # 0.79 measured (0.357 when it carried 0.55 kg)
 
@@ -229,10 +231,7 @@ def test_without_load_sharing_the_analysis_designs_for_the_worst_share() -> None
     # the lighter payload named passes, though it flies smaller scales (steeper ropes)
     named = {v.fixes.get("payload.mass") for v in alone.violations} - {None}
     assert len(named) == 1 and 0.18 < min(named) < 0.19, named
-    lighter = dataclasses.replace(square.config.payload, mass=min(named))
-    unshared = _with_flight(square, load_sharing=False)
-    assert analyze(dataclasses.replace(
-        unshared, config=dataclasses.replace(unshared.config, payload=lighter))).ok
+    assert analyze(_with_payload(_with_flight(square, load_sharing=False), min(named))).ok
     assert not any("load_sharing" in w for w in analyze(square).warnings)
     # three ropes: the split is the balance's own, with or without load sharing
     triangle = _with_flight(load_team(TRIANGLE), load_sharing=False)
