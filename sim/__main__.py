@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import json
 import logging
 import signal
 import sys
@@ -68,12 +69,26 @@ def _gusts(text: str | None) -> float | None:
     return value
 
 
+def _team_json(text: str | None) -> object:
+    """The mapping ``--team-json`` gives (None without it); malformed JSON is one line."""
+    if text is None:
+        return None
+    try:
+        return json.loads(text)
+    except (ValueError, RecursionError) as exc:
+        raise ValueError(f"--team-json: not JSON ({exc})") from None
+
+
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="python -m sim",
         description="Simulate a team of quadrotors carrying a payload; every vehicle is a "
                     "MAVLink 2 system on zenoh (and UDP with --udp).")
     p.add_argument("--config", required=True, help="team file, e.g. configs/bebop_square.yaml")
+    p.add_argument("--team-json", default=None, metavar="JSON",
+                   help="the team's contents as JSON, in place of the file's (a GCS passes a "
+                        "team changed in memory this way); relative paths still start from "
+                        "the file's directory")
     p.add_argument("--speed", type=_speed, default=None, metavar="N|max",
                    help="sim seconds per wall second (default 1; max with --lockstep)")
     p.add_argument("--lockstep", action="store_true",
@@ -137,7 +152,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
         options = _options(args)
-        team = load_team(args.config)
+        team = load_team(args.config, mapping=_team_json(args.team_json))
         world_config = load_world_config(DEFAULT_WORLD_CONFIG)
         gusts = _gusts(args.gusts)
         if gusts is not None:

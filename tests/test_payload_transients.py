@@ -144,7 +144,8 @@ def test_the_team_takes_off_below_its_shortest_rope(square: Team) -> None:
     """With ropes of their own lengths the first to go taut is the shortest: the take-off
     stops ``flight.takeoff_slack`` below it, with every rope still slack."""
     ropes = (1.0, 1.118, 1.118, 1.118)
-    uneven = _with(square, "payload", rope_lengths=ropes, mass=0.1)  # analysis passes
+    uneven = _with(square, "payload", rope_lengths=ropes, rope_length=max(ropes),
+                   mass=0.1)  # analysis passes
     first = math.sqrt(1.0 - 0.5)  # 1 m rope, 0.707 m from the centroid
     assert uneven.taut_altitude() == pytest.approx(first, abs=1e-3)
     assert square.taut_altitude() == pytest.approx(math.sqrt(1.25 - 0.5))

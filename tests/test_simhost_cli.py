@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import contextlib
 import itertools
+import json
 import selectors
 import signal
 import socket
@@ -23,6 +24,8 @@ import zenoh
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from gcs.app import free_tcp_port
+from gcs.common import to_mapping
+from gcs.config import load_team
 from gcs.testing import signed_connection, team_key
 from gcs.transport import ZenohSettings, open_session
 from gcs.wire import Sealer, SimTruth, Unsealer, decode_clock, encode_time, keys
@@ -88,7 +91,12 @@ def test_bad_config_is_one_line_and_exit_status_2(tmp_path: Path,
                         (("--config", str(CONFIG), "--listen", "tcp-127.0.0.1"), "listen"),
                         (("--config", str(CONFIG), "--duration", "-1"), "duration"),
                         (("--config", str(CONFIG), "--gusts", "40"), "--gusts"),
-                        (("--config", str(CONFIG), "--gusts", "nan"), "--gusts")):
+                        (("--config", str(CONFIG), "--gusts", "nan"), "--gusts"),
+                        (("--config", str(CONFIG), "--team-json", "{"), "--team-json"),
+                        (("--config", str(CONFIG), "--team-json", "[1]"), "expected a mapping"),
+                        (("--config", str(CONFIG), "--team-json", json.dumps(
+                            {**to_mapping(load_team(CONFIG).config), "payload": {"mass": 0.2}})),
+                         "payload.rope_length")):
         assert sim_main(list(args)) == 2
         out, err = capsys.readouterr()
         assert out == "" and err.startswith("sim: error: ") and err.count("\n") == 1, err

@@ -154,7 +154,7 @@ class HeadlessFlight:
             lockstep = False
         elif connect is None:
             self.endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
-            self.sim = SimProcess(team.source, endpoint=self.endpoint, speed=speed or "max",
+            self.sim = SimProcess(team, endpoint=self.endpoint, speed=speed or "max",
                                   lockstep=lockstep, signing=team.config.gcs.signing,
                                   extra=("--seed", str(seed),
                                          *(() if gusts is None else ("--gusts", repr(gusts)))),

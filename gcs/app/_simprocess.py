@@ -10,6 +10,7 @@ from __future__ import annotations
 import collections
 import contextlib
 import ctypes
+import json
 import os
 import queue
 import signal
@@ -21,6 +22,9 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import IO
+
+from gcs.common import to_mapping
+from gcs.config import Team
 
 __all__ = ["SimProcess", "SimStartError", "free_tcp_port"]
 
@@ -92,7 +96,8 @@ class SimProcess:
     """A running ``python -m sim``; use as a context manager (terminates it on exit).
 
     Args:
-        config: team config file.
+        config: team config file, or a loaded team: the simulator then flies it as it is
+            in memory (its file's directory still anchors relative paths).
         endpoint: zenoh endpoint the sim listens on, e.g. ``tcp/127.0.0.1:7447``.
         speed: sim seconds per wall second, or ``"max"``.
         lockstep: let the GCS's clock acks pace the sim (headless, deterministic).
@@ -107,12 +112,17 @@ class SimProcess:
             (:meth:`gcs.testing.Host.command`); it must exec the sim, not fork it.
     """
 
-    def __init__(self, config: str | Path, *, endpoint: str, speed: str = "1",
+    def __init__(self, config: str | Path | Team, *, endpoint: str, speed: str = "1",
                  lockstep: bool = False, signing: bool = True, extra: tuple[str, ...] = (),
                  ready_timeout: float = 60.0,
                  wrap: Callable[..., list[str]] | None = None,
                  progress: Callable[[str], None] | None = None) -> None:
-        cmd = [sys.executable, "-m", "sim", "--config", str(config), "--listen", endpoint,
+        team_json: list[str] = []
+        if isinstance(config, Team):
+            team_json = ["--team-json", json.dumps(to_mapping(config.config))]
+            config = config.source
+        cmd = [sys.executable, "-m", "sim", "--config", str(config), *team_json,
+               "--listen", endpoint,
                "--speed", speed, *(["--lockstep"] if lockstep else []),
                *([] if signing else ["--insecure"]), *extra]
         if wrap is not None:

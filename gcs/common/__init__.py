@@ -28,7 +28,14 @@ from gcs.common._lazy import lazy_modules
 from gcs.common._shipped import LOCAL_CONFIGS, default_config, shipped_config
 from gcs.common._signals import stop_on_signals
 from gcs.common._threads import join_thread
-from gcs.common._typed_config import ConfigError, FieldError, field, from_mapping, load_yaml
+from gcs.common._typed_config import (
+    ConfigError,
+    FieldError,
+    field,
+    from_mapping,
+    load_yaml,
+    to_mapping,
+)
 
 __all__ = [
     "HOLD_KP",
@@ -46,4 +53,5 @@ __all__ = [
     "load_yaml",
     "shipped_config",
     "stop_on_signals",
+    "to_mapping",
 ]

@@ -37,7 +37,8 @@ import yaml
 
 from gcs.common._shipped import missing_config_hint
 
-__all__ = ["MAX_FILE_BYTES", "ConfigError", "FieldError", "field", "from_mapping", "load_yaml"]
+__all__ = ["MAX_FILE_BYTES", "ConfigError", "FieldError", "field", "from_mapping", "load_yaml",
+           "to_mapping"]
 
 T = TypeVar("T")
 
@@ -274,6 +275,19 @@ def from_mapping(cls: type[T], data: Any, source: str, where: str = "") -> T:
         raise ConfigError(source, _join(where, exc.field), exc.what) from None
     except (ValueError, TypeError) as exc:  # __post_init__ cross-field checks
         raise ConfigError(source, where, str(exc)) from None
+
+
+def to_mapping(value: Any) -> Any:
+    """The plain form of a config object (mappings, lists, numbers, strings, None): what
+    :func:`from_mapping` builds the same object back from. Why: a config changed in
+    memory reaches another process (the simulator) as it is, not as its file says."""
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return {f.name: to_mapping(getattr(value, f.name)) for f in dataclasses.fields(value)}
+    if isinstance(value, tuple | list):
+        return [to_mapping(v) for v in value]
+    if isinstance(value, Mapping):
+        return {k: to_mapping(v) for k, v in value.items()}
+    return value
 
 
 def _join(where: str, name: str) -> str:

@@ -415,10 +415,15 @@ def _normalise(raw: Any, path: Path) -> Any:
     return raw
 
 
-def load_team(path: str | Path) -> Team:
-    """Load and validate a team file; raises ConfigError (one line) on any mistake."""
+def load_team(path: str | Path, *, mapping: Any = None) -> Team:
+    """Load and validate a team file; raises ConfigError (one line) on any mistake.
+
+    ``mapping``: the team's contents in place of the file's (a config changed in memory,
+    :func:`gcs.common.to_mapping`'s form), checked as the file would be; the file's
+    directory still anchors relative paths (airframe, keys, certificates).
+    """
     path = Path(path)
-    raw = _normalise(load_yaml(path), path)
+    raw = _normalise(load_yaml(path) if mapping is None else mapping, path)
     cfg = from_mapping(TeamConfig, raw, str(path))
     if not isinstance(raw.get("airframe"), Airframe):  # given inline: checked here
         check_airframe(cfg.airframe, str(path), "airframe")
