@@ -239,8 +239,8 @@ class GcsApp:
                           setpoints_per_tick=1 if lockstep else None, gate=self.gate)
         if override_analysis and not analysis.ok:
             runtime.analysis_override = True
-            self._early_notes += [("warning", f"flying against the analysis "
-                                              f"(--override-analysis): {v.term}: {v.message}")
+            self._early_notes += [("warning", f"flying a team the analysis refuses "
+                                              f"(overridden): {v.term}: {v.message}")
                                   for v in analysis.violations]
         with self._notes_lock:  # the notes that came first are shown first
             for level, text in self._early_notes:
