@@ -280,3 +280,15 @@ def test_a_team_is_analysed_once_and_a_changed_team_afresh() -> None:
         team.config, payload=dataclasses.replace(team.config.payload, mass=0.6)))
     assert analyze(heavier) is not first
     assert analyze(heavier).equilibrium_tension > first.equilibrium_tension
+
+
+def test_a_team_loaded_again_is_not_analysed_again_and_a_changed_one_is() -> None:
+    """The analysis is a function of the config: the same file loaded twice (a suite's
+    worker, flights of many seeds) gives the same analysis object; another payload another."""
+    first = analyze(load_team(SQUARE))
+    assert analyze(load_team(SQUARE)) is first
+    team = load_team(SQUARE)
+    heavier = dataclasses.replace(team, config=dataclasses.replace(
+        team.config, payload=dataclasses.replace(team.config.payload, mass=0.5)))
+    other = analyze(heavier)
+    assert other is not first and other.vertical_load > first.vertical_load

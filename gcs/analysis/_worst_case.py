@@ -54,6 +54,7 @@ vehicle taken from the geometry (:mod:`gcs.analysis._team_load`):
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 import json
 import math
@@ -74,7 +75,7 @@ from gcs.analysis._team_load import (
     hang_depth,
     worst_load,
 )
-from gcs.config import Team
+from gcs.config import Team, TeamConfig
 from gcs.formation import motion_basis
 
 __all__ = ["GAIN_FIELDS", "Analysis", "StaticShares", "Violation", "a_safe_span", "analysis_json",
@@ -712,20 +713,29 @@ SHARED_ROPES_CHECKED = 6
 payload's split within the design share (the hexagon)."""
 
 _ANALYSES: weakref.WeakKeyDictionary[Team, Analysis] = weakref.WeakKeyDictionary()
+_BY_CONFIG: collections.OrderedDict[TeamConfig, Analysis] = collections.OrderedDict()
+_BY_CONFIG_KEPT = 32
+"""Analyses kept by config value: a process that loads the same file again (a test
+suite's worker, flights of many seeds) asks for the same analysis."""
 _ANALYSES_LOCK = threading.Lock()
 
 
 def analyze(team: Team) -> Analysis:
     """Run the worst-case analysis of a loaded team.
 
-    Once per team object (0.6 s for the square): a loaded team is frozen, and the
-    command line, the scenario check and the GCS each ask for the same team's."""
+    Once per team (0.6 s for the square): a loaded team is frozen, its analysis a
+    function of its config alone, and the command line, the scenario check and the GCS
+    each ask for the same team's."""
     with _ANALYSES_LOCK:
-        known = _ANALYSES.get(team)
+        known = _ANALYSES.get(team) or _BY_CONFIG.get(team.config)
     if known is None:
         known = _analyze(team)
-        with _ANALYSES_LOCK:
-            _ANALYSES[team] = known
+    with _ANALYSES_LOCK:
+        _ANALYSES[team] = known
+        _BY_CONFIG[team.config] = known
+        _BY_CONFIG.move_to_end(team.config)
+        while len(_BY_CONFIG) > _BY_CONFIG_KEPT:
+            _BY_CONFIG.popitem(last=False)
     return known
 
 
