@@ -70,13 +70,17 @@ def _gusts(text: str | None) -> float | None:
 
 
 def _team_json(text: str | None) -> object:
-    """The mapping ``--team-json`` gives (None without it); malformed JSON is one line."""
+    """The mapping ``--team-json`` gives (None without it); malformed JSON, or JSON that
+    is not an object, is one line."""
     if text is None:
         return None
     try:
-        return json.loads(text)
+        value = json.loads(text)
     except (ValueError, RecursionError) as exc:
         raise ValueError(f"--team-json: not JSON ({exc})") from None
+    if not isinstance(value, dict):
+        raise ValueError(f"--team-json: expected a JSON object, got {type(value).__name__}")
+    return value
 
 
 def _parser() -> argparse.ArgumentParser:

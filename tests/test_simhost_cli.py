@@ -93,7 +93,8 @@ def test_bad_config_is_one_line_and_exit_status_2(tmp_path: Path,
                         (("--config", str(CONFIG), "--gusts", "40"), "--gusts"),
                         (("--config", str(CONFIG), "--gusts", "nan"), "--gusts"),
                         (("--config", str(CONFIG), "--team-json", "{"), "--team-json"),
-                        (("--config", str(CONFIG), "--team-json", "[1]"), "expected a mapping"),
+                        (("--config", str(CONFIG), "--team-json", "[1]"), "a JSON object"),
+                        (("--config", str(CONFIG), "--team-json", "null"), "a JSON object"),
                         (("--config", str(CONFIG), "--team-json", json.dumps(
                             {**to_mapping(load_team(CONFIG).config), "payload": {"mass": 0.2}})),
                          "payload.rope_length")):

@@ -59,7 +59,6 @@ import dataclasses
 import json
 import math
 import threading
-import weakref
 from dataclasses import asdict, dataclass, field
 from typing import NamedTuple
 
@@ -712,9 +711,8 @@ SHARED_ROPES_CHECKED = 6
 """The most taut ropes on which load sharing is checked in the simulator to hold the
 payload's split within the design share (the hexagon)."""
 
-_ANALYSES: weakref.WeakKeyDictionary[Team, Analysis] = weakref.WeakKeyDictionary()
-_BY_CONFIG: collections.OrderedDict[TeamConfig, Analysis] = collections.OrderedDict()
-_BY_CONFIG_KEPT = 32
+_ANALYSES: collections.OrderedDict[TeamConfig, Analysis] = collections.OrderedDict()
+_ANALYSES_KEPT = 32
 """Analyses kept by config value: a process that loads the same file again (a test
 suite's worker, flights of many seeds) asks for the same analysis."""
 _ANALYSES_LOCK = threading.Lock()
@@ -727,15 +725,14 @@ def analyze(team: Team) -> Analysis:
     function of its config alone, and the command line, the scenario check and the GCS
     each ask for the same team's."""
     with _ANALYSES_LOCK:
-        known = _ANALYSES.get(team) or _BY_CONFIG.get(team.config)
+        known = _ANALYSES.get(team.config)
     if known is None:
         known = _analyze(team)
     with _ANALYSES_LOCK:
-        _ANALYSES[team] = known
-        _BY_CONFIG[team.config] = known
-        _BY_CONFIG.move_to_end(team.config)
-        while len(_BY_CONFIG) > _BY_CONFIG_KEPT:
-            _BY_CONFIG.popitem(last=False)
+        _ANALYSES[team.config] = known
+        _ANALYSES.move_to_end(team.config)
+        while len(_ANALYSES) > _ANALYSES_KEPT:
+            _ANALYSES.popitem(last=False)
     return known
 
 
