@@ -38,6 +38,39 @@ def pytest_unconfigure(config: pytest.Config) -> None:
         shutil.rmtree(_CONFIG_HOMES.pop(), ignore_errors=True)
 
 
+def shared_fixture_group(item: pytest.Item) -> str | None:
+    """The xdist group of a test that uses one of the suite's own shared fixtures (session
+    scope: the fixture's name; module scope: the module), None for one that uses none.
+
+    With ``--dist loadgroup`` the tests of one group run on one worker, so a shared
+    fixture (a flight, a wheel, 150 configs analysed) is built once, not on every worker
+    that happens to run one of its tests.
+    """
+    info = getattr(item, "_fixtureinfo", None)
+    if info is None:
+        return None
+    shared: dict[str, list[str]] = {"session": [], "module": []}
+    for name in item.fixturenames:  # type: ignore[attr-defined]
+        for fixturedef in info.name2fixturedefs.get(name, ()):
+            module = getattr(fixturedef.func, "__module__", "")
+            if module.split(".")[0] == "tests" and fixturedef.scope in shared:
+                shared[fixturedef.scope].append(name)
+    if shared["session"]:
+        return f"fixture-{sorted(shared['session'])[0]}"
+    if shared["module"]:
+        return f"module-{item.module.__name__}"  # type: ignore[attr-defined]
+    return None
+
+
+@pytest.hookimpl(tryfirst=True)  # before pytest-xdist reads the groups into the node ids
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    for item in items:
+        if item.get_closest_marker("xdist_group") is None:
+            group = shared_fixture_group(item)
+            if group is not None:
+                item.add_marker(pytest.mark.xdist_group(group))
+
+
 @pytest.fixture
 def other_host() -> Iterator[Host]:
     """A second host (a network namespace); the test is skipped, saying why, where this
