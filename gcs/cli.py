@@ -194,7 +194,7 @@ def _cmd_fly(args: argparse.Namespace) -> int:
     result = fly(team, scenario, speed=args.speed,
                  record=Path(args.record) if args.record else None, connect=args.connect,
                  progress=not args.quiet, override_analysis=args.override_analysis,
-                 gusts=gusts)
+                 gusts=gusts, fork_server=False)  # one simulator: a fork server saves nothing
     data = result.to_json()
     if args.json:
         print(json.dumps(data))

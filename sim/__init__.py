@@ -12,6 +12,8 @@ Modules:
                       and the payload.
     ``_fabric``       The sim host's side of zenoh: vehicle links and tokens, clock, truth,
                       acks and control.
+    ``_forkserver``  ``python -m sim._forkserver FD``: start simulators by forking a process
+                      that is warm.
     ``_faults``       The sim's control topic: test hooks that break a vehicle on purpose.
     ``_ground``       Penalty contact with flat ground for one point (a rotor's footprint or
                       the payload).

@@ -120,7 +120,8 @@ def run_demo(config: str, *, host: str, port: int, gamepad: Path | None,
     endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
     _say(f"starting the simulated team of {team.source} on {endpoint}…")
     with SimProcess(team.source, endpoint=endpoint, speed="1",
-                    signing=team.config.gcs.signing, ready_timeout=180.0, progress=_say) as sim:
+                    signing=team.config.gcs.signing, ready_timeout=180.0, progress=_say,
+                    fork_server=False) as sim:  # one simulator: a fork server saves nothing
         _say(sim.ready_line)
         settings = ZenohSettings(mode="peer", connect=(endpoint,))
         with GcsApp(team, zenoh_settings=settings, override_analysis=override_analysis) as app:

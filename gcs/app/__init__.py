@@ -17,6 +17,8 @@ Modules:
                      the gamepad.
     ``_seeds``       Flights of many seeds in parallel: one lockstep flight per simulator
                      seed, N at a time.
+    ``_simfork``     Simulators forked from a warm server: ready in tens of milliseconds,
+                     not two seconds.
     ``_simjoin``     Joining a running simulator (``gcs fly --connect``): lockstep or not,
                      and whether it is sound.
     ``_simprocess``  Start the simulated team (``python -m sim``) as a child process and

@@ -120,12 +120,16 @@ class HeadlessFlight:
         say: gets the line on how the team is signed (the key is made before the sim),
             and what a failed flight on real vehicles does before it ends.
         ready_timeout: longest wait for the simulator started here to come up, s.
+        fork_server: fork the simulator from this process's warm server
+            (:class:`SimProcess`): True where a process flies many (the API, the seeds of a
+            Monte-Carlo run); ``gcs fly``'s one flight starts a fresh one.
     """
 
     def __init__(self, team: Team, *, speed: str | None = None, record: Path | None = None,
                  connect: str | None = None, seed: int = 0, override_analysis: bool = False,
                  lockstep: bool = True, say: Callable[[str], None] | None = None,
-                 ready_timeout: float = 60.0, gusts: float | None = None) -> None:
+                 ready_timeout: float = 60.0, gusts: float | None = None,
+                 fork_server: bool = True) -> None:
         self.team = team
         self._say = say if say is not None else (lambda _line: None)
         self.real = flies_real_vehicles(team)
@@ -158,7 +162,7 @@ class HeadlessFlight:
                                   lockstep=lockstep, signing=team.config.gcs.signing,
                                   extra=("--seed", str(seed),
                                          *(() if gusts is None else ("--gusts", repr(gusts)))),
-                                  ready_timeout=ready_timeout)
+                                  ready_timeout=ready_timeout, fork_server=fork_server)
         else:
             if speed is not None:
                 raise ConfigError("--speed", "", f"paces a simulator started here; the one "
@@ -337,10 +341,11 @@ def _refuse_unless_analysed(team: Team) -> None:
 def fly(team: Team, scenario: Scenario, *, speed: str | None = None,
         record: Path | None = None, connect: str | None = None, progress: bool = True,
         override_analysis: bool = False, seed: int = 0,
-        gusts: float | None = None) -> FlightResult:
+        gusts: float | None = None, fork_server: bool = True) -> FlightResult:
     """Fly ``scenario``; blocks until it ends. ``speed``: of the sim (default ``"max"``;
     real vehicles: 1 only); ``connect``: endpoint of a running sim; ``seed``: of the
-    started sim's sensor noise and gusts; ``gusts``: its turbulence, m/s per axis. A
+    started sim's sensor noise and gusts; ``gusts``: its turbulence, m/s per axis;
+    ``fork_server``: as :class:`HeadlessFlight`'s. A
     team on px4/ardupilot links flies those (:class:`HeadlessFlight`); a bad ``speed``,
     ``connect`` or ``gusts`` for it is a ConfigError."""
 
@@ -350,7 +355,8 @@ def fly(team: Team, scenario: Scenario, *, speed: str | None = None,
 
     error: str | None = None
     with HeadlessFlight(team, speed=speed, record=record, connect=connect, seed=seed,
-                        override_analysis=override_analysis, say=say, gusts=gusts) as flight:
+                        override_analysis=override_analysis, say=say, gusts=gusts,
+                        fork_server=fork_server) as flight:
 
         def show(k: int, step: Step) -> None:
             if progress:

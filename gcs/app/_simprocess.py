@@ -23,6 +23,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import IO
 
+from gcs.app._simfork import ForkedSim, fork_server_enabled, fork_sim
 from gcs.common import to_mapping
 from gcs.config import Team
 
@@ -50,14 +51,22 @@ def cpu_seconds(pid: int) -> float | None:
 
 class _Busy:
     """Whether a starting process is working (its CPU time grows), so that a first start
-    that compiles its kernels on a loaded machine is not mistaken for a hung one."""
+    that compiles its kernels on a loaded machine is not mistaken for a hung one.
 
-    def __init__(self, pid: int) -> None:
+    ``pid`` is asked at each sample: a forked simulator is its warming server until forked.
+    """
+
+    def __init__(self, pid: Callable[[], int]) -> None:
         self._pid = pid
+        self._sampled: int | None = None
         self._samples: collections.deque[tuple[float, float]] = collections.deque()
 
     def sample(self, now: float) -> None:
-        cpu = cpu_seconds(self._pid)
+        pid = self._pid()
+        if pid != self._sampled:
+            self._sampled = pid
+            self._samples.clear()
+        cpu = cpu_seconds(pid)
         if cpu is not None:
             self._samples.append((now, cpu))
             while len(self._samples) > 2 and now - self._samples[1][0] >= _BUSY_WINDOW_S:
@@ -105,6 +114,10 @@ class SimProcess:
         progress: told a line every few seconds while the simulator is not ready yet (its
             first start compiles its kernels, which can take a minute: not a hang).
         extra: more command-line arguments for the sim.
+        fork_server: fork it from this process's warm simulator server (:mod:`gcs.app._simfork`:
+            ready in tens of milliseconds once the server is up; ``GCS_SIM_FORK=0`` turns it
+            off); False starts a fresh ``python -m sim``, as a process that starts only one
+            should (the server costs what a cold start does).
         ready_timeout: how long to wait for its ready line, s; up to five times that
             while the simulator is working (its CPU time grows: a first start compiling
             its kernels on a loaded machine), so only an idle or runaway one is given up.
@@ -116,7 +129,8 @@ class SimProcess:
                  lockstep: bool = False, signing: bool = True, extra: tuple[str, ...] = (),
                  ready_timeout: float = 60.0,
                  wrap: Callable[..., list[str]] | None = None,
-                 progress: Callable[[str], None] | None = None) -> None:
+                 progress: Callable[[str], None] | None = None,
+                 fork_server: bool = True) -> None:
         team_json: list[str] = []
         if isinstance(config, Team):
             team_json = ["--team-json", json.dumps(to_mapping(config.config))]
@@ -125,18 +139,23 @@ class SimProcess:
                "--listen", endpoint,
                "--speed", speed, *(["--lockstep"] if lockstep else []),
                *([] if signing else ["--insecure"]), *extra]
+        forked: ForkedSim | None = None
         if wrap is not None:
             cmd = wrap(*cmd)
+        elif fork_server and fork_server_enabled():
+            with contextlib.suppress(OSError):  # no server: a cold start, as without one
+                forked = fork_sim(cmd[3:])
         self.endpoint = endpoint
-        self._proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                      text=True, bufsize=1, preexec_fn=_die_with_parent)
+        self._proc: subprocess.Popen[str] | ForkedSim = forked or subprocess.Popen(
+            cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, bufsize=1,
+            preexec_fn=_die_with_parent)
         self._lines: queue.Queue[str] = queue.Queue()
         self._err: list[str] = []
         threading.Thread(target=self._pump, args=(self._proc.stdout, True), daemon=True).start()
         threading.Thread(target=self._pump, args=(self._proc.stderr, False),
                          daemon=True).start()
         start = time.monotonic()
-        busy = _Busy(self._proc.pid)
+        busy = _Busy(lambda: self._proc.pid)
         next_note = start + _FIRST_NOTE_S
         while True:
             try:
