@@ -28,10 +28,11 @@ TEAM = load_team("configs/bebop_square.yaml")
 
 
 @contextlib.contextmanager
-def in_formation(team: Team = TEAM) -> Iterator[GcsApp]:
-    """``team`` in formation flight with the payload lifted, in lockstep with the real sim."""
+def in_formation(team: Team = TEAM, *, speed: str = "max") -> Iterator[GcsApp]:
+    """``team`` in formation flight with the payload lifted, in lockstep with the real sim
+    (``speed``: its pace; a page watched in a browser wants a pace a viewer sees)."""
     endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
-    with SimProcess(team.source, endpoint=endpoint, speed="max", lockstep=True), \
+    with SimProcess(team.source, endpoint=endpoint, speed=speed, lockstep=True), \
             GcsApp(team, zenoh_settings=ZenohSettings(connect=(endpoint,)), sim_clock=True,
                    lockstep=True) as app:
         app.start()

@@ -35,12 +35,16 @@ ON_TEAM = 0.3
 centroid, horizontally, m."""
 FAR = 10.0
 """... and stands no farther than this from it, m."""
+PACE = "3"
+"""Sim seconds per wall second of the flight the page shows."""
 
 
 @pytest.fixture(scope="module")
 def flight() -> Iterator[GcsApp]:
-    """The team in formation, at least :data:`AWAY` from the origin, nearly still."""
-    with in_formation() as app:
+    """The team in formation, at least :data:`AWAY` from the origin, nearly still; flown at
+    :data:`PACE` (at full speed the page took the GCS's ticks at tens a second, and the
+    viewer's input waited behind them on a loaded machine)."""
+    with in_formation(speed=PACE) as app:
         while np.hypot(*centroid(app)[:2]) < 1.0:  # diagonally: away from both fences
             app.operator.set_sticks(0.6, 0.6, 0.0, now=app.clock.now(), source="test")
             sim_sleep(app, 0.25)
