@@ -154,8 +154,10 @@ def serve(ctl: socket.socket) -> None:
             os.close(out)
             os.close(err)
             status[pid] = answer
-            with contextlib.suppress(OSError):
+            try:
                 answer.sendall(f"pid {pid}\n".encode())
+            except OSError:  # the client gave this one up before it was forked: stop it
+                os.kill(pid, signal.SIGTERM)
     finally:
         for answer in status.values():
             answer.close()

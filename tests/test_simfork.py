@@ -8,6 +8,7 @@ simulator) with the same seed from ``fly_seeds`` (forked).
 from __future__ import annotations
 
 import os
+import signal
 import subprocess
 import sys
 import textwrap
@@ -16,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from gcs.app import SimProcess, SimStartError, free_tcp_port
+from gcs.app import SimProcess, SimStartError, _simfork, free_tcp_port
 from gcs.app._simfork import ForkedSim
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -125,3 +126,29 @@ def test_the_server_is_stopped_when_the_process_exits() -> None:
     assert done.returncode == 0, done.stderr
     assert not _alive(int(done.stdout)), "the fork server is left after its process exited"
     assert os.environ.get("GCS_SIM_FORK", "1") != "0"
+
+
+def test_a_simulator_given_up_before_it_was_forked_is_stopped_once_it_is(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Closed while the server still warms up, a simulator cannot be signalled yet: the
+    client gives it up, and the server, unable to tell it the pid, stops it at once."""
+    monkeypatch.setattr(_simfork, "_STOP_WAIT_S", 0.0)
+    _simfork._SERVER.stop()  # a fresh server: it warms up for about a second
+    config = str(ROOT / "configs/bebop_square.yaml")
+    given_up = _simfork.fork_sim(["--config", config, "--listen", _endpoint(), "--speed",
+                                  "max", "--lockstep"])
+    given_up.terminate()
+    assert given_up.returncode == -signal.SIGTERM and given_up._child is None
+    server = given_up._server.pid
+    # requests are served in order: once the next one is up, the first was forked
+    with SimProcess(config, endpoint=_endpoint(), speed="max", lockstep=True) as next_one:
+        children = set()
+        deadline = time.monotonic() + 10.0
+        while time.monotonic() < deadline:
+            children = {int(p) for p in subprocess.run(
+                ["pgrep", "-P", str(server)], capture_output=True, text=True,
+                check=False).stdout.split()}
+            if children == {next_one._proc.pid}:
+                break
+            time.sleep(0.05)
+        assert children == {next_one._proc.pid}, (children, next_one._proc.pid)

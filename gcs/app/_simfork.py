@@ -104,11 +104,17 @@ class ForkedSim:
         return self.returncode
 
     def send_signal(self, signum: int) -> None:
-        """Signal the simulator; one not forked yet is waited for first (a few s at most:
-        the server is warming up), so a stop is never lost."""
+        """Signal the simulator; one not forked yet is waited for first (the server is
+        warming up), and given up after a few seconds: the server then stops it as soon
+        as it forks it (it cannot tell it its pid), so a stop is never lost."""
         deadline = time.monotonic() + _STOP_WAIT_S
         while self._child is None and self.poll() is None and time.monotonic() < deadline:
             self._read(0.1)
+        with self._lock:
+            if self.returncode is None and self._child is None:
+                self.returncode = -signum
+                self._status.close()
+                return
         if self.poll() is None and self._child is not None:
             with contextlib.suppress(ProcessLookupError):
                 os.kill(self._child, signum)
