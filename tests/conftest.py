@@ -62,6 +62,14 @@ def shared_fixture_group(item: pytest.Item) -> str | None:
     return None
 
 
+def scheduled_first(item: pytest.Item) -> bool:
+    """Whether a test goes to a worker before the rest: a long one (marker ``long``) or one
+    of a group (the groups are the largest units of work the workers cannot split), so
+    that none of them starts last and ends the run alone."""
+    return (item.get_closest_marker("long") is not None
+            or item.get_closest_marker("xdist_group") is not None)
+
+
 @pytest.hookimpl(tryfirst=True)  # before pytest-xdist reads the groups into the node ids
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     for item in items:
@@ -69,6 +77,7 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
             group = shared_fixture_group(item)
             if group is not None:
                 item.add_marker(pytest.mark.xdist_group(group))
+    items.sort(key=lambda item: not scheduled_first(item))  # stable: file order otherwise
 
 
 @pytest.fixture

@@ -9,6 +9,8 @@ fast the machine is.
 
 from __future__ import annotations
 
+import pytest
+
 from gcs.app import SimProcess, fly, free_tcp_port, load_scenario
 from gcs.config import load_team
 from gcs.testing import Host, LossyRelay
@@ -17,6 +19,7 @@ TEAM = load_team("configs/bebop_square.yaml")
 SHORT = load_scenario("configs/scenarios/short_flight.yaml")
 
 
+@pytest.mark.long  # the short flight at 1x on the wall clock, over the slow link
 def test_the_short_flight_completes_across_hosts_over_a_lossy_slow_link(
         other_host: Host) -> None:
     port = free_tcp_port()
