@@ -246,12 +246,15 @@ def test_exported_timeline_scrubs_plays_and_jumps(opened: tuple[Any, dict],
     assert abs(page.evaluate("gcsExport.time()") - 0.25 * duration) < 0.01 * duration
     # space plays (viser's own space handler must not start its own clock) and pauses
     page.locator("body").press("Space")
+    wall0 = time.monotonic()
     t0 = page.evaluate("gcsExport.time()")
     time.sleep(1.5)
     assert page.evaluate("gcsExport.playing()")
     page.locator("body").press("Space")
     t1 = page.evaluate("gcsExport.time()")
-    assert 0.5 < t1 - t0 < 3.0, (t0, t1)
+    wall = time.monotonic() - wall0  # a loaded machine's key presses take their time
+    # real time: at least most of the sleep, at most the wall time the reads spanned
+    assert 0.5 < t1 - t0 < wall + 0.5, (t0, t1, wall)
     settle(page)
     time.sleep(0.5)
     assert page.evaluate("gcsExport.time()") == t1 and page.evaluate("gcsExport.synced()")

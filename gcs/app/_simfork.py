@@ -63,20 +63,27 @@ class ForkedSim:
         return self._child if self._child is not None else self._server.pid
 
     def _read(self, timeout: float) -> None:
-        """Take what the server said of this child within ``timeout`` s."""
+        """Take what the server said of this child within ``timeout`` s (the wait holds
+        no lock: another thread's poll is never kept waiting by it)."""
+        if self.returncode is not None:
+            return
+        try:
+            readable, _, _ = select.select([self._status], [], [], max(0.0, timeout))
+        except (OSError, ValueError):  # closed by another thread meanwhile
+            return
+        if not readable:
+            return
         with self._lock:
             if self.returncode is not None:
                 return
-            readable, _, _ = select.select([self._status], [], [], max(0.0, timeout))
-            if not readable:
-                return
             try:
-                data = self._status.recv(256)
+                data = self._status.recv(256, socket.MSG_DONTWAIT)
+            except BlockingIOError:  # another thread took it
+                return
             except OSError:
                 data = b""
             if not data:  # the server is gone: so is the child (it dies with the server)
-                self.returncode = -signal.SIGKILL if self.returncode is None else \
-                    self.returncode
+                self.returncode = -signal.SIGKILL
                 self._status.close()
                 return
             self._buffer += data
