@@ -19,7 +19,6 @@ SIGTERM (PR_SET_PDEATHSIG), as a cold simulator does when its GCS dies.
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import json
 import os
 import select
@@ -27,6 +26,8 @@ import signal
 import socket
 import struct
 import sys
+
+from gcs.common import die_with_parent
 
 __all__ = ["serve", "warm_up"]
 
@@ -83,8 +84,7 @@ def _child(request: dict[str, object], out: int, err: int,
     try:
         for sock in inherited:  # the server's: the control socket, the other children's
             sock.close()
-        libc = ctypes.CDLL(None, use_errno=True)
-        libc.prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG: die with the server
+        die_with_parent()  # the server: it exits with its client
         for signum in (signal.SIGINT, signal.SIGTERM, signal.SIGCHLD):
             signal.signal(signum, signal.SIG_DFL)
         os.dup2(out, 1)
@@ -98,12 +98,13 @@ def _child(request: dict[str, object], out: int, err: int,
         assert isinstance(env, dict)
         os.environ.clear()
         os.environ.update({str(k): str(v) for k, v in env.items()})
-        argv = request["argv"]
-        assert isinstance(argv, list)
-        sys.argv = ["python -m sim", *map(str, argv)]
+        given = request["argv"]
+        assert isinstance(given, list)
+        argv = [str(a) for a in given]
+        sys.argv = ["python -m sim", *argv]
         from sim.__main__ import main
 
-        code = main([str(a) for a in argv])
+        code = main(argv)
     except SystemExit as exc:  # argparse
         code = exc.code if isinstance(exc.code, int) else 2
     except BaseException as exc:  # the child must end here, whatever it is

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import collections
 import contextlib
-import ctypes
 import json
 import os
 import queue
@@ -24,7 +23,7 @@ from pathlib import Path
 from typing import IO
 
 from gcs.app._simfork import ForkedSim, fork_server_enabled, fork_sim
-from gcs.common import to_mapping
+from gcs.common import die_with_parent, to_mapping
 from gcs.config import Team
 
 __all__ = ["SimProcess", "SimStartError", "free_tcp_port"]
@@ -86,14 +85,6 @@ class SimStartError(RuntimeError):
     """The simulator did not come up; carries what it printed."""
 
 
-def _die_with_parent() -> None:
-    """In the child: get SIGTERM when the GCS dies, even by SIGKILL (Linux), so no sim
-    is left flying headless."""
-    if sys.platform.startswith("linux"):
-        libc = ctypes.CDLL(None, use_errno=True)
-        libc.prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
-
-
 def free_tcp_port() -> int:
     """A TCP port on 127.0.0.1 that was free a moment ago."""
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
@@ -148,7 +139,7 @@ class SimProcess:
         self.endpoint = endpoint
         self._proc: subprocess.Popen[str] | ForkedSim = forked or subprocess.Popen(
             cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, bufsize=1,
-            preexec_fn=_die_with_parent)
+            preexec_fn=die_with_parent)
         self._lines: queue.Queue[str] = queue.Queue()
         self._err: list[str] = []
         threading.Thread(target=self._pump, args=(self._proc.stdout, True), daemon=True).start()

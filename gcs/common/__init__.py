@@ -16,7 +16,8 @@ Modules:
                        package.
     ``_shipped``       Where the configs shipped with the project are, in a checkout and
                        once installed.
-    ``_signals``       Ctrl-C and SIGTERM stop a command, whatever started it.
+    ``_signals``       Ctrl-C and SIGTERM stop a command, whatever started it; a child dies
+                       with its parent.
     ``_threads``       Stopping a thread and saying so when it will not stop.
     ``_typed_config``  Typed, validated configuration objects built from YAML.
 """
@@ -26,7 +27,7 @@ from gcs.common._hold import HOLD_KP, HOLD_KV
 from gcs.common._jit_cache import kernel
 from gcs.common._lazy import lazy_modules
 from gcs.common._shipped import LOCAL_CONFIGS, default_config, shipped_config
-from gcs.common._signals import stop_on_signals
+from gcs.common._signals import die_with_parent, stop_on_signals
 from gcs.common._threads import join_thread
 from gcs.common._typed_config import (
     ConfigError,
@@ -45,6 +46,7 @@ __all__ = [
     "ConfigError",
     "FieldError",
     "default_config",
+    "die_with_parent",
     "field",
     "from_mapping",
     "join_thread",

@@ -1,12 +1,23 @@
-"""Ctrl-C and SIGTERM stop a command, whatever started it."""
+"""Ctrl-C and SIGTERM stop a command, whatever started it; a child dies with its parent."""
 
 from __future__ import annotations
 
+import ctypes
 import signal
+import sys
 import threading
 from types import FrameType
 
-__all__ = ["stop_on_signals"]
+__all__ = ["die_with_parent", "stop_on_signals"]
+
+_PR_SET_PDEATHSIG = 1
+
+
+def die_with_parent() -> None:
+    """In a child process: get SIGTERM when the parent dies, even by SIGKILL (Linux; elsewhere
+    nothing), so no simulator is left flying headless when its GCS is gone."""
+    if sys.platform.startswith("linux"):
+        ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
 
 
 def _raise_interrupt(_signum: int, _frame: FrameType | None) -> None:
