@@ -13,7 +13,7 @@ import yaml
 from gcs.analysis import analyze
 from gcs.analysis._worst_case import rope_pull
 from gcs.config import load_team
-from tests.conftest import run_gcs
+from tests.conftest import gcs_here, run_gcs
 
 SQUARE = "configs/bebop_square.yaml"
 G = 9.80665
@@ -181,7 +181,7 @@ def key_tree(data: object) -> object:
 
 def test_json_keys_are_exactly_the_documented_tree(tmp_path: Path) -> None:
     for path in (SQUARE, str(greedy(tmp_path, c1=0.8, accel_norm=2.5))):
-        data = json.loads(run_gcs("analyze", path, "--json").stdout)
+        data = json.loads(gcs_here("analyze", path, "--json").stdout)
         assert key_tree(data) == JSON_KEYS
         assert list(data) == list(JSON_KEYS)  # order too: a stable object
         for violation in data["violations"]:
@@ -205,9 +205,9 @@ def greedy(tmp_path: Path, **changes: float) -> Path:
 
 def violated(path: Path) -> list[dict[str, object]]:
     """Run the CLI on a config that must fail; its violations (checked in text and JSON)."""
-    text = run_gcs("analyze", str(path))
+    text = gcs_here("analyze", str(path))
     assert text.returncode == 1, text.stdout + text.stderr
-    out = run_gcs("analyze", str(path), "--json")
+    out = gcs_here("analyze", str(path), "--json")
     assert out.returncode == 1
     violations: list[dict[str, object]] = json.loads(out.stdout)["violations"]
     for v in violations:

@@ -32,7 +32,7 @@ from gcs.app import (
 from gcs.app._scenario import scenario_scales
 from gcs.common import ConfigError
 from gcs.config import load_team
-from tests.conftest import SHORT, SQUARE, run_gcs
+from tests.conftest import SHORT, SQUARE, gcs_here, run_gcs
 
 PAPER = "configs/scenarios/paper_flight.yaml"
 
@@ -68,7 +68,7 @@ def test_the_square_is_flown_on_two_seeds_and_held_to_its_analysis() -> None:
     assert out.returncode == 0, out.stdout + out.stderr
     rows = _rows(out.stdout)
     assert list(rows) == [f.label for f in FIGURES], out.stdout
-    analysis = json.loads(run_gcs("analyze", SQUARE, "--json").stdout)
+    analysis = json.loads(gcs_here("analyze", SQUARE, "--json").stdout)
     load = analysis["static_load"]
     predicted = {label: float(r["predicted"]) for label, r in rows.items()}
     # the square: accelerating, at the scales the paper flight flies (0.9 to 1.1, held at
@@ -111,7 +111,7 @@ def test_a_flight_beyond_a_tiny_safe_deformation_fails_naming_the_figure(
     0.013 m), and its flight, pulled 0.2 m in at lift-off, exceeds it."""
     team = _team(tmp_path, limits={"accel_norm": 2.729},
                  analysis={"design_rope_angle_deg": 40.0, "disturbance_accel": 0.005})
-    assert run_gcs("analyze", str(team)).returncode == 0
+    assert gcs_here("analyze", str(team)).returncode == 0
     out = run_gcs("analyze", str(team), "--verify", "--scenario", SHORT, "--seeds", "3",
                   "--jobs", "1")
     assert out.returncode == 1, out.stdout + out.stderr
@@ -126,7 +126,7 @@ def test_a_flight_beyond_a_tiny_safe_deformation_fails_naming_the_figure(
 def test_a_team_the_analysis_refuses_is_not_flown(tmp_path: Path) -> None:
     team = _team(tmp_path, payload={"mass": 2.0})
     start = time.monotonic()
-    out = run_gcs("analyze", str(team), "--verify", "--json")
+    out = gcs_here("analyze", str(team), "--verify", "--json")
     assert out.returncode == 1
     assert time.monotonic() - start < 20.0
     assert json.loads(out.stdout)["violations"]  # the analysis, as without --verify
@@ -136,7 +136,7 @@ def test_a_team_the_analysis_refuses_is_not_flown(tmp_path: Path) -> None:
 @pytest.mark.parametrize("args", [("--seeds", "4-1"), ("--seeds", "x"), ("--jobs", "0"),
                                   ("--gusts", "-0.5"), ("--gusts", "nan")])
 def test_bad_verify_options_are_one_line(args: tuple[str, str]) -> None:
-    out = run_gcs("analyze", SQUARE, "--verify", *args)
+    out = gcs_here("analyze", SQUARE, "--verify", *args)
     assert out.returncode == 2
     assert len(out.stderr.strip().splitlines()) == 1 and args[0] in out.stderr
 

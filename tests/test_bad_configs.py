@@ -29,7 +29,7 @@ from gcs.common import ConfigError, load_yaml
 from gcs.config import load_team
 from gcs.formation import build_formation, motion_basis
 from gcs.loop import OperatorCommand
-from tests.conftest import SHORT, SQUARE, run_gcs
+from tests.conftest import SHORT, SQUARE, gcs_here, run_gcs
 from vehicles import BEBOP2, load_airframe
 
 PAIR = Path("tests/data/bebop_pair.yaml")
@@ -611,7 +611,7 @@ def test_a_scale_below_the_smallest_certified_is_named_and_held_there(tmp_path: 
     operator = OperatorCommand(team.config.operator, safe_guidance(team, a))
     assert operator.set_scale(0.3) == a.scale_min_flown
     assert operator.set_scale(0.9) == 0.9  # the paper flight's shrink is flown
-    json_scales = json.loads(run_gcs("analyze", SQUARE, "--json").stdout)["scales_flown"]
+    json_scales = json.loads(gcs_here("analyze", SQUARE, "--json").stdout)["scales_flown"]
     assert json_scales == {"min": a.scale_min_flown, "max": pytest.approx(a.scale_max_flown)}
 
 

@@ -13,7 +13,7 @@ from gcs.analysis import analyze
 from gcs.config import load_team
 from gcs.config._team import ConfigError
 from gcs.loop import load_gamepad_config
-from tests.conftest import run_gcs
+from tests.conftest import gcs_here
 from vehicles import BEBOP2, load_airframe
 
 SQUARE = Path("configs/bebop_square.yaml")
@@ -78,7 +78,7 @@ def test_gcs_analyze_refuses_a_config_mistake_in_one_line_with_status_2(
     """The command line, not only load_team: one stderr line naming file and field, exit 2."""
     mutate, field, words = MISTAKES[mistake]
     path = write(tmp_path, mutate)
-    out = run_gcs("analyze", str(path))
+    out = gcs_here("analyze", str(path))
     assert out.returncode == 2, out.stdout + out.stderr
     assert out.stdout == ""
     [line] = out.stderr.splitlines()

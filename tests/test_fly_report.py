@@ -22,7 +22,7 @@ from gcs.flightlog import _report as report
 from gcs.flightlog._figstyle import FORMATS
 from gcs.flightlog._report import FIGURES
 from gcs.wire import SAFETY_ARMED
-from tests.conftest import SHORT, SQUARE, run_gcs
+from tests.conftest import SHORT, SQUARE, gcs_here, run_gcs
 from tests.logfiles import VEHICLES, plain_copy, raw_messages
 
 
@@ -66,7 +66,7 @@ def test_missing_scenario_is_one_line() -> None:
 
 def test_report_matches_the_flight(short_flight: tuple[dict, Path], tmp_path: Path) -> None:
     m, log = short_flight
-    out = run_gcs("report", str(log), "--out", str(tmp_path), "--json", "--quiet")
+    out = gcs_here("report", str(log), "--out", str(tmp_path), "--json", "--quiet")
     assert out.returncode == 0, out.stderr
     summary = json.loads(out.stdout)
     assert summary["figures"] == _files(FIGURES)
@@ -100,7 +100,7 @@ def test_truncated_log_still_reports(short_flight: tuple[dict, Path], tmp_path: 
     index = TlogIndex.build(log)
     middle = len(index) // 2  # cut inside a frame: a cut on a record boundary is a whole log
     cut.write_bytes(data[: int(index.offset[middle]) + int(index.length[middle]) // 2])
-    out = run_gcs("report", str(cut), "--out", str(tmp_path / "r"), "--quiet")
+    out = gcs_here("report", str(cut), "--out", str(tmp_path / "r"), "--quiet")
     assert out.returncode == 0, out.stderr
     assert "truncated=True" in out.stdout
     parsed = FlightLog.load(cut)
@@ -131,7 +131,7 @@ def test_corrupt_log_still_reports_and_says_what_was_skipped(
         data[k] ^= int(rng.integers(1, 256))
     bad = tmp_path / "corrupt.tlog"
     bad.write_bytes(bytes(data))
-    out = run_gcs("report", str(bad), "--out", str(tmp_path / "r"), "--json", "--quiet")
+    out = gcs_here("report", str(bad), "--out", str(tmp_path / "r"), "--json", "--quiet")
     assert out.returncode == 0, out.stderr
     summary = json.loads(out.stdout)
     r = summary["metrics"]
@@ -145,7 +145,7 @@ def test_corrupt_log_still_reports_and_says_what_was_skipped(
     assert 0.8 * 22_000 < summary["messages"] < len(TlogIndex.build(log))
     for name in ("formation.png", "trajectories.png", "accelerations.png"):
         assert (tmp_path / "r" / name).stat().st_size > 1000
-    text = run_gcs("report", str(bad), "--out", str(tmp_path / "r2"), "--quiet").stdout
+    text = gcs_here("report", str(bad), "--out", str(tmp_path / "r2"), "--quiet").stdout
     assert "corrupt bytes skipped=" in text and "damaged timestamp rejected=" in text
 
 
@@ -168,7 +168,7 @@ def test_plain_autopilot_log_reports_what_its_telemetry_gives(
     checked against the recorded messages as pymavlink reads them."""
     m, flight = short_flight
     plain = plain_copy(flight, tmp_path / "plain.tlog")
-    out = run_gcs("report", str(plain), "--out", str(tmp_path / "r"), "--json", "--quiet")
+    out = gcs_here("report", str(plain), "--out", str(tmp_path / "r"), "--json", "--quiet")
     assert out.returncode == 0, out.stderr
     summary = json.loads(out.stdout)
     r = summary["metrics"]
@@ -226,7 +226,7 @@ def test_summary_lists_the_events_one_line_per_condition(
         short_flight: tuple[dict, Path], tmp_path: Path) -> None:
     """Four vehicles switching mode together are one line with its count, not four."""
     _, log = short_flight
-    out = run_gcs("report", str(log), "--out", str(tmp_path), "--quiet")
+    out = gcs_here("report", str(log), "--out", str(tmp_path), "--quiet")
     assert out.returncode == 0, out.stderr
     summary = json.loads((tmp_path / "summary.json").read_text())
     md = (tmp_path / "summary.md").read_text()
@@ -267,7 +267,7 @@ def test_an_event_storm_is_one_line_per_condition() -> None:
 
 def test_unreadable_files_are_refused_in_one_line(tmp_path: Path) -> None:
     for command in ("report", "replay"):
-        out = run_gcs(command, str(tmp_path))  # a folder, not a log
+        out = gcs_here(command, str(tmp_path))  # a folder, not a log
         assert out.returncode == 2, out.stderr
         assert out.stderr.count("\n") == 1 and str(tmp_path) in out.stderr
         assert "Traceback" not in out.stderr
@@ -276,9 +276,9 @@ def test_unreadable_files_are_refused_in_one_line(tmp_path: Path) -> None:
 def test_empty_and_garbage_logs_are_refused_in_one_line(tmp_path: Path) -> None:
     empty = tmp_path / "empty.tlog"
     empty.write_bytes(b"")
-    out = run_gcs("report", str(empty), "--quiet")
+    out = gcs_here("report", str(empty), "--quiet")
     assert out.returncode == 2 and "empty file" in out.stderr
     junk = tmp_path / "junk.tlog"
     junk.write_bytes(bytes(range(256)) * 40)
-    out = run_gcs("report", str(junk), "--quiet")
+    out = gcs_here("report", str(junk), "--quiet")
     assert out.returncode == 2 and "no MAVLink messages" in out.stderr

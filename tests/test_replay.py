@@ -31,7 +31,7 @@ from viser import _messages as viser_messages
 from gcs.app import free_tcp_port
 from gcs.flightlog import FlightLog, TlogIndex
 from gcs.wire import SAFETY_ARMED, MavlinkEncoder, heartbeat_mode_text, mavlink
-from tests.conftest import run_gcs
+from tests.conftest import gcs_here
 from tests.logfiles import ardupilot_log, plain_copy, raw_messages, with_frame
 from web._actions import OperatorActions
 from web._control_lock import ControlLock
@@ -405,7 +405,7 @@ def test_replay_command_serves_the_page_without_controls(flight: Path,
     operator controls (those are built per viewer, so only a viewer can tell)."""
     bad = tmp_path / "bad.tlog"
     bad.write_bytes(b"not a log at all" * 10)
-    out = run_gcs("replay", str(bad))
+    out = gcs_here("replay", str(bad))
     assert out.returncode == 2
     assert len(out.stderr.strip().splitlines()) == 1 and "error" in out.stderr
 
@@ -453,7 +453,7 @@ def test_replay_of_a_damaged_log_says_what_could_not_be_read(flight: Path, tmp_p
     assert lines[1:] == [f"note: {note}", "stopping…"]
     if damage == "cut":
         assert "truncated=True" in note
-        report = run_gcs("report", str(bad), "--out", str(tmp_path / "r"), "--quiet")
+        report = gcs_here("report", str(bad), "--out", str(tmp_path / "r"), "--quiet")
         assert f"note: {note}" in report.stdout.splitlines()  # one wording for both
     else:
         assert "corrupt bytes skipped=0" not in note

@@ -28,7 +28,7 @@ import zstandard
 
 from gcs.app import free_tcp_port
 from gcs.flightlog import FlightLog
-from tests.conftest import run_gcs
+from tests.conftest import gcs_here
 from web._export import EXPORT_RATE_HZ
 from web._replay import ReplayCursor
 from web._replay_page import ReplayUi
@@ -45,7 +45,7 @@ def exported(short_flight: tuple[dict, Path],
     """(the .tlog, the exported file, what the command printed)."""
     log = short_flight[1]
     out = tmp_path_factory.mktemp("export") / "flight.html"
-    done = run_gcs("replay", str(log), "--export", str(out), "--quiet", timeout=300)
+    done = gcs_here("replay", str(log), "--export", str(out), "--quiet")
     assert done.returncode == 0, done.stdout + done.stderr
     return log, out, done.stdout
 
@@ -133,7 +133,7 @@ def test_export_is_one_self_contained_file(exported: tuple[Path, Path, str]) -> 
 def test_export_to_a_missing_folder_is_one_line(short_flight: tuple[dict, Path],
                                                 tmp_path: Path) -> None:
     out = tmp_path / "no such folder" / "flight.html"
-    done = run_gcs("replay", str(short_flight[1]), "--export", str(out), "--quiet")
+    done = gcs_here("replay", str(short_flight[1]), "--export", str(out), "--quiet")
     assert done.returncode == 2, done.stdout + done.stderr
     assert done.stderr.strip().splitlines() == [
         f"gcs replay: error: {out.parent}: no such directory"], done.stderr

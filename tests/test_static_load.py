@@ -34,7 +34,7 @@ from sim import (
 from sim._config import SensorConfig, WorldConfig
 from sim._layout import Layout
 from sim._team_layout import team_layout
-from tests.conftest import run_gcs
+from tests.conftest import gcs_here
 from vehicles import load_airframe, load_autopilot_config
 
 G = 9.80665
@@ -149,7 +149,7 @@ def test_rope_lengths_reach_the_simulator(tmp_path: Path) -> None:
     assert team.config.payload.rope_length == 1.273  # the longest, for whoever needs one
     assert list(team_layout(team).rope_length) == ropes
     assert analyze(team).load.rope_lengths == tuple(ropes)
-    out = run_gcs("analyze", str(team_file(tmp_path, KITE, "bad.yaml", rope_lengths=[1.2])))
+    out = gcs_here("analyze", str(team_file(tmp_path, KITE, "bad.yaml", rope_lengths=[1.2])))
     assert out.returncode == 2 and out.stderr.count("\n") == 1, out.stderr
 
 
