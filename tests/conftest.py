@@ -83,17 +83,12 @@ def shared_fixture_group(item: pytest.Item) -> str | None:
     return None
 
 
-def schedule_rank(item: pytest.Item) -> int:
-    """When a test goes to a worker: 0, the live demo's (marker ``live_demo``: its two
-    minutes on the wall clock, mostly waiting, overlap the rest); 1, a long one (marker
-    ``long``) or one of a group (the largest units of work the workers cannot split), so
-    that none of them starts last and ends the run alone; 2, the rest."""
-    if item.get_closest_marker("live_demo") is not None:
-        return 0
-    if (item.get_closest_marker("long") is not None
-            or item.get_closest_marker("xdist_group") is not None):
-        return 1
-    return 2
+def scheduled_first(item: pytest.Item) -> bool:
+    """Whether a test goes to a worker before the rest: a long one (marker ``long``) or one
+    of a group (the groups are the largest units of work the workers cannot split), so
+    that none of them starts last and ends the run alone."""
+    return (item.get_closest_marker("long") is not None
+            or item.get_closest_marker("xdist_group") is not None)
 
 
 @pytest.hookimpl(tryfirst=True)  # before pytest-xdist reads the groups into the node ids
@@ -103,7 +98,7 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
             group = shared_fixture_group(item)
             if group is not None:
                 item.add_marker(pytest.mark.xdist_group(group))
-    items.sort(key=schedule_rank)  # stable: file order otherwise
+    items.sort(key=lambda item: not scheduled_first(item))  # stable: file order otherwise
 
 
 @pytest.fixture

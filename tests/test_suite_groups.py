@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import schedule_rank
+from tests.conftest import scheduled_first
 
 
 @pytest.fixture(scope="module")
@@ -26,13 +26,10 @@ def test_a_test_using_a_shared_module_fixture_runs_in_its_modules_group(
     assert mark is not None and mark.args == ("module-tests.test_suite_groups",), mark
 
 
-def test_the_live_demo_then_the_grouped_and_long_tests_are_scheduled_before_the_rest(
+def test_the_grouped_and_the_long_tests_are_scheduled_before_the_rest(
         request: pytest.FixtureRequest) -> None:
-    """In the session's order, the live demo's tests come first (where collected), then
-    every grouped or long test, then the rest (in this file the first test has no group,
-    the second has)."""
-    ranks = [schedule_rank(item) for item in request.session.items]
-    assert {1, 2} <= set(ranks)
-    assert ranks == sorted(ranks), "a test comes before one that should start earlier"
-    live = [item.name for item in request.session.items if schedule_rank(item) == 0]
-    assert all(item.get_closest_marker("live_demo") for item in request.session.items[:len(live)])
+    """In the session's order, every grouped or long test comes before every other one (in
+    this file the first test has no group, the second has)."""
+    firsts = [scheduled_first(item) for item in request.session.items]
+    assert any(firsts) and not all(firsts)
+    assert firsts == sorted(firsts, reverse=True), "a grouped or long test comes late"

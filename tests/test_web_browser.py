@@ -9,10 +9,12 @@ updates a second reach it. The tests share one demo and run in file order:
 a viewer whose connection stops (its badge says STALE, then it reconnects),
 fly from the page, then a second viewer, then the abort (from the keyboard, and
 the always-visible button at a small window with the panels collapsed), then
-Ctrl-C, then the button of a page whose server is gone. They run beside the rest of
-the suite, as the operator's foreground job (:func:`foreground`), and first (marker
-``live_demo``; ``-m 'not live_demo'`` leaves them out). On several workers the file
-stays on one of them, in this order (its ``xdist_group``, with ``--dist loadgroup``).
+Ctrl-C, then the button of a page whose server is gone. The README's command runs
+them alone after the rest of the suite (marker ``live_demo``): beside it, the page
+answered too late and the vehicles held mid-test (and the run was no shorter: the
+machine's two cores were busy throughout). They run as the operator's foreground job
+(:func:`foreground`). On several workers the file stays on one of them, in this order
+(its ``xdist_group``, with ``--dist loadgroup``).
 Screenshots go to the pytest temporary
 directory (the path is printed; ``-s`` shows it).
 """
@@ -45,7 +47,7 @@ from web._browser_script import ABORT_ANSWERS, RECONNECT_AFTER_S, STALE_AFTER_S
 from web.wireviewer import SceneRecord
 
 # One process runs the whole file in order: the tests share one demo, and the last ones stop
-# it.
+# it; the README runs them alone (live_demo), since the demo flies on the wall clock.
 pytestmark = [pytest.mark.xdist_group("browser"), pytest.mark.live_demo]
 
 CHROMIUM = Path("/usr/bin/chromium")
@@ -73,12 +75,12 @@ FOREGROUND_NICE = -5
 @pytest.fixture(scope="module", autouse=True)
 def foreground() -> Iterator[None]:
     """The demo, its simulator, Playwright and the browser as the operator's foreground
-    job, ahead of other work on the machine (the rest of the suite, CPU hogs): this
-    thread runs at nice :data:`FOREGROUND_NICE` for the module, as root, and everything it
-    starts inherits that. At the same priority as three other workers the page answered
-    the held W too late (its command still 0 after 3 s) and the vehicles held mid-test
-    in some runs; what the tests check is the page and its controls, not the machine's
-    load. Elsewhere (not root) nothing changes."""
+    job, ahead of other work on the machine (CPU hogs): this thread runs at nice
+    :data:`FOREGROUND_NICE` for the module, as root, and what it starts inherits that
+    (chromium sets its own threads' priorities back to 0). Beside two CPU hogs at the same
+    priority the demo's setpoints came late enough for every vehicle to hold mid-test in
+    some runs; what the tests check is the page and its controls, not the machine's load.
+    Elsewhere (not root) nothing changes."""
     if os.geteuid() != 0:
         yield
         return
