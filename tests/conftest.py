@@ -1,5 +1,5 @@
-"""What several test files share: the ``gcs`` command line, one recorded short flight and a
-second host."""
+"""What several test files share: the ``gcs`` command line, one recorded short flight, the
+project's wheel installed in a venv, a second host, and how the suite is scheduled."""
 
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ import json
 import os
 import shutil
 import signal
+import site
 import subprocess
 import sys
 import tempfile
@@ -23,6 +24,9 @@ from gcs.testing import Host, NetnsUnavailableError
 
 SQUARE = "configs/bebop_square.yaml"
 SHORT = "configs/scenarios/short_flight.yaml"
+ROOT = Path(__file__).resolve().parents[1]
+SHIPPED = Path("share") / "formation-gcs" / "configs"
+"""Where the wheel puts the configs it ships, under its environment's prefix."""
 
 _CONFIG_HOMES: list[str] = []
 
@@ -38,9 +42,8 @@ def compile_sources() -> None:
     apiece. Once, in the controller; about 0.5 s."""
     if not sys.dont_write_bytecode or os.environ.get("PYTEST_XDIST_WORKER"):
         return
-    root = Path(__file__).resolve().parents[1]
     for package in PACKAGES:
-        compileall.compile_dir(root / package, quiet=1)
+        compileall.compile_dir(ROOT / package, quiet=1)
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -165,3 +168,41 @@ def short_flight(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict, Path]:
             done.write_text(json.dumps([json.loads(out.stdout.splitlines()[-1]), str(log)]))
         metrics, log_path = json.loads(done.read_text())
     return metrics, Path(log_path)
+
+
+def run_outside(cmd: list[str], cwd: Path,
+                timeout: float = 180) -> subprocess.CompletedProcess[str]:
+    """``cmd`` in ``cwd`` without this checkout's PYTHONPATH or venv, output captured."""
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
+    return subprocess.run(cmd, cwd=cwd, env=env, capture_output=True, text=True,
+                          timeout=timeout, check=False)
+
+
+@pytest.fixture(scope="session")
+def installed(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    """(venv, an empty working directory) with the project's wheel installed in the venv:
+    built once for the session (tests/test_install.py, tests/test_plugin_outside.py)."""
+    base = tmp_path_factory.mktemp("install")
+    source, wheels, venv, work = (base / d for d in ("source", "wheels", "venv", "work"))
+    work.mkdir()
+    # built from a copy: setuptools writes build/ and *.egg-info beside the sources
+    shutil.copytree(ROOT, source, ignore=shutil.ignore_patterns(
+        ".git", "build", "*.egg-info", "__pycache__", ".*_cache", "out", "*.tlog"))
+    done = run_outside([sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps",
+                "--no-build-isolation", "-w", str(wheels), str(source)], cwd=base, timeout=300)
+    assert done.returncode == 0, done.stderr
+    wheel = next(wheels.glob("formation_gcs-*.whl"))
+    done = run_outside([sys.executable, "-m", "venv", "--without-pip", str(venv)], cwd=base)
+    assert done.returncode == 0, done.stderr
+    # the dependencies: this environment's site directories, after the venv's own (a
+    # path line in a .pth; .pth files inside them, this checkout's editable hook among
+    # them, are not run). --system-site-packages would give the base interpreter's
+    # instead when this one is itself a venv.
+    (inner,) = venv.glob("lib/python*/site-packages")
+    outer = [*site.getsitepackages(), site.getusersitepackages()]
+    (inner / "outer-environment.pth").write_text(
+        "".join(f"{d}\n" for d in outer if Path(d).is_dir()))
+    done = run_outside([sys.executable, "-m", "pip", "--python", str(venv / "bin" / "python"),
+                "install", "--quiet", "--no-deps", str(wheel)], cwd=base)
+    assert done.returncode == 0, done.stderr
+    return venv, work

@@ -23,7 +23,7 @@ import socket
 import subprocess
 from pathlib import Path
 
-from tests.test_install import ROOT, installed, run  # noqa: F401 (the fixture)
+from tests.conftest import ROOT, run_outside
 
 EXAMPLE = re.compile(r"<!-- the example: [^\n]*-->\n```python\n(.*?)```", re.S)
 
@@ -83,7 +83,7 @@ def docs_example() -> str:
 
 
 def test_a_suite_outside_the_checkout_flies_with_the_fixture_and_leaves_nothing_behind(
-        installed: tuple[Path, Path]) -> None:  # noqa: F811 (the fixture)
+        installed: tuple[Path, Path]) -> None:
     venv, work = installed
     borrow_numba_cache(venv)
     suite = work / "suite"
@@ -94,9 +94,10 @@ def test_a_suite_outside_the_checkout_flies_with_the_fixture_and_leaves_nothing_
         assert call in example, f"the docs' example no longer shows {call}"
     (suite / "test_carry.py").write_text(example)
     (suite / "test_failing.py").write_text(FAILING)
-    done = run([str(venv / "bin" / "python"), "-m", "pytest", "-q", "-p", "no:cacheprovider",
-                "-W", "error::pytest.PytestUnraisableExceptionWarning"], cwd=suite,
-               timeout=600)
+    done = run_outside([str(venv / "bin" / "python"), "-m", "pytest", "-q", "-p",
+                        "no:cacheprovider", "-W",
+                        "error::pytest.PytestUnraisableExceptionWarning"],
+                       cwd=suite, timeout=600)
     assert done.returncode == 0, done.stdout + done.stderr
     assert "2 passed, 1 xfailed" in done.stdout, done.stdout
     # nothing left: no simulator started from the venv's configs, no port open
