@@ -6,8 +6,9 @@ second, independent zenoh session, so a test passes only if the real
 simulated vehicles moved. What each browser received over its websocket is
 decoded too (``web.wireviewer.SceneRecord``): the scene it holds and how many
 updates a second reach it. The tests share one demo and run in file order:
-a viewer whose connection stops (its badge says STALE, then it reconnects),
-fly from the page, then a second viewer, then the abort (from the keyboard, and
+take control and lift from the page, a viewer whose connection stops while the team
+climbs (its badge says STALE, then it reconnects), fly from the page, then a second
+viewer, then the abort (from the keyboard, and
 the always-visible button at a small window with the panels collapsed), then
 Ctrl-C, then the button of a page whose server is gone. The README's command runs
 them alone after the rest of the suite (marker ``live_demo``): beside it, the page
@@ -528,6 +529,45 @@ def is_fresh(page) -> bool:  # type: ignore[no-untyped-def]
         is not None
 
 
+def press_phase(page, button: str, phase: str, demo: Demo,  # type: ignore[no-untyped-def]
+                timeout: float = 40.0) -> None:
+    """Press a phase button and wait for the page to show ``phase``."""
+    clicked = time.monotonic()
+    page.get_by_role("button", name=button, exact=True).click()
+
+    def explain() -> str:
+        page.evaluate("0")  # Playwright delivers websocket events during its own calls
+        frames = [f"+{t - clicked:.2f} s {len(f)} B" for t, f in SENT[id(page)]
+                  if t >= clicked and button.encode() in f]
+        return f"frames naming {button!r} sent since the click: {frames}; " + situation(page, demo)
+
+    wait_for(lambda: text(page, "phase") == phase, timeout, f"phase {phase}", explain)
+
+
+def test_the_pilot_takes_control_and_lifts_with_the_buttons(pilot, demo: Demo) -> None:
+    """The pilot takes control, arms, takes off, lifts, sets down while lifting, and lifts
+    again: the test ends as the team climbs (about 21 s at speed 1), which the next one
+    (a viewer whose connection stops) spends."""
+    pilot.get_by_role("button", name="Take control").click()
+    wait_for(lambda: banner(pilot) == "You hold control.", 10, "control taken")
+    # the script's channel exists for the holder and is never shown (the sticks and keys
+    # below travel through it)
+    field = pilot.locator("label", has_text=re.compile(r"^browser input$"))
+    wait_for(lambda: field.count() == 1 and not field.is_visible(), 5,
+             "the browser input field present and hidden", lambda: f"{field.count()} fields")
+    for button, phase in (("arm", "armed"), ("take off", "hover"), ("lift", "lifting")):
+        press_phase(pilot, button, phase, demo)
+    # set down while lifting: the altitude target drops back, the team is in hover again
+    lifted = float(operator(pilot)["target"])
+    press_phase(pilot, "set down", "setting down", demo, timeout=10)
+    # the phase shows with its event at once, the operator line with the next tick
+    wait_for(lambda: float(operator(pilot)["target"]) < lifted - 1.0, 5,
+             "the altitude target back down", lambda: text(pilot, "operator"))
+    wait_for(lambda: text(pilot, "phase") == "hover", 30, "hover after set down",
+             lambda: situation(pilot, demo))
+    press_phase(pilot, "lift", "lifting", demo)
+
+
 def test_a_viewer_that_stops_receiving_says_stale_and_reconnects(browser, pilot,
                                                                  demo: Demo) -> None:
     """A viewer reaches the demo through a relay that stops delivering (its websocket stays
@@ -589,42 +629,12 @@ def test_a_viewer_that_stops_receiving_says_stale_and_reconnects(browser, pilot,
         relay.close()
 
 
-def press_phase(page, button: str, phase: str, demo: Demo,  # type: ignore[no-untyped-def]
-                timeout: float = 40.0) -> None:
-    """Press a phase button and wait for the page to show ``phase``."""
-    clicked = time.monotonic()
-    page.get_by_role("button", name=button, exact=True).click()
-
-    def explain() -> str:
-        page.evaluate("0")  # Playwright delivers websocket events during its own calls
-        frames = [f"+{t - clicked:.2f} s {len(f)} B" for t, f in SENT[id(page)]
-                  if t >= clicked and button.encode() in f]
-        return f"frames naming {button!r} sent since the click: {frames}; " + situation(page, demo)
-
-    wait_for(lambda: text(page, "phase") == phase, timeout, f"phase {phase}", explain)
-
-
-def test_the_pilot_flies_the_team_with_buttons_keys_and_sticks(pilot, demo: Demo,
-                                                                screens: Path) -> None:
-    pilot.get_by_role("button", name="Take control").click()
-    wait_for(lambda: banner(pilot) == "You hold control.", 10, "control taken")
-    # the script's channel exists for the holder and is never shown (the sticks and keys
-    # below travel through it)
-    field = pilot.locator("label", has_text=re.compile(r"^browser input$"))
-    wait_for(lambda: field.count() == 1 and not field.is_visible(), 5,
-             "the browser input field present and hidden", lambda: f"{field.count()} fields")
-    for button, phase in (("arm", "armed"), ("take off", "hover"), ("lift", "lifting")):
-        press_phase(pilot, button, phase, demo)
-    # set down while lifting: the altitude target drops back, the team is in hover again
-    lifted = float(operator(pilot)["target"])
-    press_phase(pilot, "set down", "setting down", demo, timeout=10)
-    # the phase shows with its event at once, the operator line with the next tick
-    wait_for(lambda: float(operator(pilot)["target"]) < lifted - 1.0, 5,
-             "the altitude target back down", lambda: text(pilot, "operator"))
-    wait_for(lambda: text(pilot, "phase") == "hover", 30, "hover after set down",
+def test_the_pilot_flies_the_team_with_keys_and_sticks(pilot, demo: Demo,
+                                                       screens: Path) -> None:
+    # about 21 s of climb at speed 1 since the last test's lift: the pickup band at
+    # 0.02 m/s, then 0.1 m/s
+    wait_for(lambda: text(pilot, "phase") == "formation", 90, "phase formation",
              lambda: situation(pilot, demo))
-    # about 21 s of climb at speed 1: the pickup band at 0.02 m/s, then 0.1 m/s
-    press_phase(pilot, "lift", "formation", demo, timeout=90.0)
 
     # hotkey: hold W, the loop commands full forward and the real team speeds up northwards
     keyboard = pilot.keyboard
