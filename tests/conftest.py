@@ -15,6 +15,7 @@ import site
 import subprocess
 import sys
 import tempfile
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -46,17 +47,63 @@ def compile_sources() -> None:
         compileall.compile_dir(ROOT / package, quiet=1)
 
 
-def warm_kernels(config: pytest.Config) -> None:
-    """Compile the simulator's numba kernels once, before the workers start (with
+WARMING = "GCS_TESTS_WARMING"
+"""Environment variable naming the lock file the kernels' warm-up holds while it runs."""
+WARM_WAIT_S = 300.0
+"""A worker waits this long at most for the warm-up, s (then each process compiles)."""
+
+
+def warm_kernels(config: pytest.Config, directory: str) -> None:
+    """Start compiling the simulator's numba kernels before the workers start (with
     ``-n``): on a fresh checkout (CI) every worker's simulator fork server, every
     simulator started cold and every in-process world of the first minute compiled them
-    at once, about 15 s of CPU apiece. Loaded from the cache, about 1 s. A failure here
-    only leaves each process to compile what it needs."""
+    at once, about 15 s of CPU apiece. The workers start and collect meanwhile (about 7
+    s of CPU each), and wait for it before their first test (:func:`pytest_runtest_setup`).
+    Loaded from the cache, about 1 s. A failure here only leaves each process to compile
+    what it needs."""
     if os.environ.get("PYTEST_XDIST_WORKER") or not config.getoption("numprocesses", None):
         return
-    with contextlib.suppress(OSError, subprocess.SubprocessError):
-        subprocess.run([sys.executable, "-c", "from sim._forkserver import warm_up; warm_up()"],
-                       cwd=ROOT, capture_output=True, timeout=600, check=False)
+    lock = Path(directory) / "warming.lock"
+    with open(lock, "w") as held:
+        fcntl.flock(held, fcntl.LOCK_EX)  # the warm-up's copy holds it until it exits
+        try:
+            subprocess.Popen([sys.executable, "-c",
+                              "from sim._forkserver import warm_up; warm_up()"],
+                             cwd=ROOT, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                             stderr=subprocess.DEVNULL, pass_fds=(held.fileno(),))
+        except OSError:
+            return
+    os.environ[WARMING] = str(lock)
+
+
+def wait_for_warm_up(path: str, timeout: float = WARM_WAIT_S) -> bool:
+    """Wait until the warm-up holding the lock ``path`` has exited; False after ``timeout``
+    s, or where the lock cannot be read."""
+    deadline = time.monotonic() + timeout
+    try:
+        with open(path) as lock:
+            while True:
+                try:
+                    fcntl.flock(lock, fcntl.LOCK_SH | fcntl.LOCK_NB)
+                    return True
+                except BlockingIOError:
+                    if time.monotonic() >= deadline:
+                        return False
+                    time.sleep(0.1)
+    except OSError:
+        return False
+
+
+_warm = False
+
+
+def pytest_runtest_setup(item: pytest.Item) -> None:
+    """A worker's first test waits for the kernels' warm-up (:func:`warm_kernels`)."""
+    global _warm
+    path = os.environ.get(WARMING)
+    if not _warm and path:
+        _warm = True
+        wait_for_warm_up(path)
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -65,10 +112,10 @@ def pytest_configure(config: pytest.Config) -> None:
     here, not on import: a process that imports a test module (a spawned worker) would
     leave one behind."""
     compile_sources()
-    warm_kernels(config)
     home = tempfile.mkdtemp(prefix="gcs-tests-config-")
     _CONFIG_HOMES.append(home)
     os.environ["XDG_CONFIG_HOME"] = home
+    warm_kernels(config, home)
 
 
 def pytest_unconfigure(config: pytest.Config) -> None:

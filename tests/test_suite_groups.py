@@ -1,12 +1,17 @@
-"""The suite's own scheduling: tests sharing a fixture run on one worker (tests/conftest.py)."""
+"""The suite's own scheduling (tests/conftest.py): tests sharing a fixture run on one worker,
+the long ones first, after the simulator's kernels are warm."""
 
 from __future__ import annotations
 
+import fcntl
+import os
+import subprocess
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 
-from tests.conftest import scheduled_first
+from tests.conftest import WARMING, scheduled_first, wait_for_warm_up, warm_kernels
 
 
 @pytest.fixture(scope="module")
@@ -33,3 +38,22 @@ def test_the_grouped_and_the_long_tests_are_scheduled_before_the_rest(
     firsts = [scheduled_first(item) for item in request.session.items]
     assert any(firsts) and not all(firsts)
     assert firsts == sorted(firsts, reverse=True), "a grouped or long test comes late"
+
+
+def test_the_kernels_warm_up_holds_the_workers_until_it_exits(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """With ``-n`` the controller starts the simulator's warm-up and the workers wait for
+    it before their first test: the lock it holds is free only once it has exited."""
+    monkeypatch.delenv("PYTEST_XDIST_WORKER", raising=False)  # as in the controller
+    monkeypatch.delenv(WARMING, raising=False)
+    config = SimpleNamespace(getoption=lambda name, default=None: 2)
+    warm_kernels(config, str(tmp_path))  # type: ignore[arg-type]
+    lock = os.environ[WARMING]
+    # held while the warm-up runs (about 1 s, loading the cache)
+    with open(lock) as held, pytest.raises(BlockingIOError):
+        fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    assert wait_for_warm_up(lock, timeout=300.0)
+    with open(lock) as free:
+        fcntl.flock(free, fcntl.LOCK_EX | fcntl.LOCK_NB)  # nobody holds it any more
+    assert not subprocess.run(["pgrep", "-f", "from sim._forkserver import warm_up"],
+                              capture_output=True, check=False).stdout.strip()
