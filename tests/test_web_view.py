@@ -184,7 +184,11 @@ def pan_away(page, panned: Callable[[], bool],  # type: ignore[no-untyped-def]
     for attempt in range(3):
         page.mouse.move(x, y)
         page.mouse.down(button="right")
+        page.wait_for_timeout(100)  # held, then dragged and let go, as a hand does: the
+        # view moves in its render loop, a few frames a second on a loaded machine, where
+        # a drag let go at once went unseen three times in a row (five workers)
         page.mouse.move(x + 0.8 * box["width"], y + 0.1 * box["height"], steps=16)
+        page.wait_for_timeout(300)
         page.mouse.up(button="right")
         deadline = time.monotonic() + 3.0
         while time.monotonic() < deadline:
