@@ -204,7 +204,8 @@ def gcs_here(*args: str) -> subprocess.CompletedProcess[str]:
                 code = exc.code if isinstance(exc.code, int) else int(exc.code is not None)
     finally:
         for sig, handler in handlers.items():  # main() makes them raise KeyboardInterrupt
-            signal.signal(sig, handler)
+            if handler is not None:  # None: set outside Python, left as main() made it
+                signal.signal(sig, handler)
     return subprocess.CompletedProcess(["gcs", *args], code, out.getvalue(), err.getvalue())
 
 
