@@ -806,7 +806,9 @@ def test_a_second_viewer_watches_until_it_takes_control(pilot, viewer, demo: Dem
         f"{situation(viewer, demo)}")
     assert operator(viewer)["source"] == f"browser#{viewer_id}"
 
-    # the first viewer's keys are now ignored
+    # the first viewer's keys are now ignored (once A's release has reached the loop:
+    # beside two CPU hogs the page still showed A's -1 a second after it)
+    wait_for(lambda: operator(pilot)["right"] == 0.0, 5, "sticks centred after A")
     pilot.keyboard.down("d")
     time.sleep(1.0)
     assert operator(pilot)["right"] == 0.0
