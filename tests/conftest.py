@@ -30,6 +30,7 @@ SHIPPED = Path("share") / "formation-gcs" / "configs"
 """Where the wheel puts the configs it ships, under its environment's prefix."""
 
 _CONFIG_HOMES: list[str] = []
+_WARM_UPS: list[subprocess.Popen[bytes]] = []
 
 
 PACKAGES = ("gcs", "sim", "vehicles", "web")
@@ -53,27 +54,29 @@ WARM_WAIT_S = 300.0
 """A worker waits this long at most for the warm-up, s (then each process compiles)."""
 
 
-def warm_kernels(config: pytest.Config, directory: str) -> None:
+def warm_kernels(config: pytest.Config, directory: str) -> subprocess.Popen[bytes] | None:
     """Start compiling the simulator's numba kernels before the workers start (with
     ``-n``): on a fresh checkout (CI) every worker's simulator fork server, every
     simulator started cold and every in-process world of the first minute compiled them
     at once, about 15 s of CPU apiece. The workers start and collect meanwhile (about 7
     s of CPU each), and wait for it before their first test (:func:`pytest_runtest_setup`).
     Loaded from the cache, about 1 s. A failure here only leaves each process to compile
-    what it needs."""
+    what it needs. Returns the warm-up's process (None: not started)."""
     if os.environ.get("PYTEST_XDIST_WORKER") or not config.getoption("numprocesses", None):
-        return
+        return None
     lock = Path(directory) / "warming.lock"
     with open(lock, "w") as held:
         fcntl.flock(held, fcntl.LOCK_EX)  # the warm-up's copy holds it until it exits
         try:
-            subprocess.Popen([sys.executable, "-c",
-                              "from sim._forkserver import warm_up; warm_up()"],
-                             cwd=ROOT, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                             stderr=subprocess.DEVNULL, pass_fds=(held.fileno(),))
+            proc = subprocess.Popen([sys.executable, "-c",
+                                     "from sim._forkserver import warm_up; warm_up()"],
+                                    cwd=ROOT, stdin=subprocess.DEVNULL,
+                                    stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                    pass_fds=(held.fileno(),))
         except OSError:
-            return
+            return None
     os.environ[WARMING] = str(lock)
+    return proc
 
 
 def wait_for_warm_up(path: str, timeout: float = WARM_WAIT_S) -> bool:
@@ -115,10 +118,19 @@ def pytest_configure(config: pytest.Config) -> None:
     home = tempfile.mkdtemp(prefix="gcs-tests-config-")
     _CONFIG_HOMES.append(home)
     os.environ["XDG_CONFIG_HOME"] = home
-    warm_kernels(config, home)
+    warm_up = warm_kernels(config, home)
+    if warm_up is not None:
+        _WARM_UPS.append(warm_up)
 
 
 def pytest_unconfigure(config: pytest.Config) -> None:
+    while _WARM_UPS:  # long done by now: reaped, or stopped if it hangs
+        warm_up = _WARM_UPS.pop()
+        try:
+            warm_up.wait(5)
+        except subprocess.TimeoutExpired:
+            warm_up.kill()
+            warm_up.wait()
     while _CONFIG_HOMES:
         shutil.rmtree(_CONFIG_HOMES.pop(), ignore_errors=True)
 
@@ -251,7 +263,8 @@ def installed(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     shutil.copytree(ROOT, source, ignore=shutil.ignore_patterns(
         ".git", "build", "*.egg-info", "__pycache__", ".*_cache", "out", "*.tlog"))
     done = run_outside([sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps",
-                "--no-build-isolation", "-w", str(wheels), str(source)], cwd=base, timeout=300)
+                        "--no-build-isolation", "-w", str(wheels), str(source)],
+                       cwd=base, timeout=300)
     assert done.returncode == 0, done.stderr
     wheel = next(wheels.glob("formation_gcs-*.whl"))
     done = run_outside([sys.executable, "-m", "venv", "--without-pip", str(venv)], cwd=base)
@@ -265,6 +278,6 @@ def installed(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     (inner / "outer-environment.pth").write_text(
         "".join(f"{d}\n" for d in outer if Path(d).is_dir()))
     done = run_outside([sys.executable, "-m", "pip", "--python", str(venv / "bin" / "python"),
-                "install", "--quiet", "--no-deps", str(wheel)], cwd=base)
+                        "install", "--quiet", "--no-deps", str(wheel)], cwd=base)
     assert done.returncode == 0, done.stderr
     return venv, work

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import fcntl
 import os
-import subprocess
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -47,13 +46,18 @@ def test_the_kernels_warm_up_holds_the_workers_until_it_exits(
     monkeypatch.delenv("PYTEST_XDIST_WORKER", raising=False)  # as in the controller
     monkeypatch.delenv(WARMING, raising=False)
     config = SimpleNamespace(getoption=lambda name, default=None: 2)
-    warm_kernels(config, str(tmp_path))  # type: ignore[arg-type]
-    lock = os.environ[WARMING]
-    # held while the warm-up runs (about 1 s, loading the cache)
-    with open(lock) as held, pytest.raises(BlockingIOError):
-        fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    assert wait_for_warm_up(lock, timeout=300.0)
-    with open(lock) as free:
-        fcntl.flock(free, fcntl.LOCK_EX | fcntl.LOCK_NB)  # nobody holds it any more
-    assert not subprocess.run(["pgrep", "-f", "from sim._forkserver import warm_up"],
-                              capture_output=True, check=False).stdout.strip()
+    warm_up = warm_kernels(config, str(tmp_path))  # type: ignore[arg-type]
+    assert warm_up is not None
+    try:
+        lock = os.environ[WARMING]
+        # held while the warm-up runs (about 1 s, loading the cache)
+        with open(lock) as held, pytest.raises(BlockingIOError):
+            fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        assert wait_for_warm_up(lock, timeout=300.0)
+        with open(lock) as free:
+            fcntl.flock(free, fcntl.LOCK_EX | fcntl.LOCK_NB)  # nobody holds it any more
+        assert warm_up.wait(5) == 0  # it exited, having loaded the kernels
+    finally:
+        if warm_up.poll() is None:
+            warm_up.kill()
+        warm_up.wait()
