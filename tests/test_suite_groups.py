@@ -1,5 +1,5 @@
 """The suite's own scheduling (tests/conftest.py): tests sharing a fixture run on one worker,
-the long ones first, after the simulator's kernels are warm."""
+the long ones first, after the simulator's kernels are warm, the test modules rewritten once."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from tests.conftest import WARMING, scheduled_first, wait_for_warm_up, warm_kernels
+from tests.conftest import WARMING, cache_rewritten, scheduled_first, wait_for_warm_up, warm_kernels
 
 
 @pytest.fixture(scope="module")
@@ -61,3 +61,21 @@ def test_the_kernels_warm_up_holds_the_workers_until_it_exits(
         if warm_up.poll() is None:
             warm_up.kill()
         warm_up.wait()
+
+
+def test_the_rewritten_test_modules_are_cached_for_the_workers(
+        pytestconfig: pytest.Config, tmp_path: Path) -> None:
+    """Where Python may not write bytecode, pytest still reads its cache of a rewritten
+    module: written once by the controller, the workers load it instead of rewriting."""
+    from _pytest.assertion import rewrite
+
+    module = tmp_path / "test_cached.py"
+    module.write_text("def check(x):\n    assert x == 2\n")
+    cache_rewritten(pytestconfig, [module])
+    pyc = rewrite.get_cache_dir(module) / ("test_cached" + rewrite.PYC_TAIL)
+    code = rewrite._read_pyc(module, pyc, lambda *_: None)
+    assert code is not None, f"no cached rewritten module at {pyc}"
+    namespace: dict[str, object] = {}
+    exec(code, namespace)
+    with pytest.raises(AssertionError, match="assert 1 == 2"):  # rewritten: it says why
+        namespace["check"](1)  # type: ignore[operator]
