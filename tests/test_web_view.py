@@ -24,8 +24,16 @@ import viser
 
 from gcs.app import GcsApp, free_tcp_port
 from tests.test_safety_flight import break_vehicle, in_formation, sim_sleep
-from tests.test_web_browser import SCENE_GREEN_MIN, headless_chromium, scene_pixels, wait_for
+from tests.test_web_browser import (
+    SCENE_GREEN_MIN,
+    freshness,
+    headless_chromium,
+    is_fresh,
+    scene_pixels,
+    wait_for,
+)
 from web import WebUi
+from web._browser_script import RECONNECT_AFTER_S
 from web.wireviewer import WireViewer
 
 AWAY = 3.0
@@ -230,6 +238,41 @@ def test_centre_on_team_by_key_and_by_button(flight: GcsApp, page_ui: WebUi,
             press()
             wait_for(browser_on_team, 10, "the browser's camera back on the team",
                      lambda: camera_text(client, flight))
+    finally:
+        page.context.close()
+
+
+HOLD_UP_S = RECONNECT_AFTER_S + 1.5
+"""How long the machine holds the page up in the test below, s."""
+
+
+def test_a_page_the_machine_holds_up_keeps_its_socket(flight: GcsApp, page_ui: WebUi,
+                                                      browser) -> None:  # type: ignore[no-untyped-def]
+    """A busy machine holds the page up for longer than RECONNECT_AFTER_S: all of it (one
+    long frame), or only its render loop, which applies what the socket brought (beats
+    included) and fell behind. The page does not take either for a silent server (it
+    reconnected: a new viewer, the viewer's pan and control gone; seen beside CPU hogs)."""
+    page, _ = open_viewer(browser, page_ui)
+    try:
+        for held, hold_up in (
+                ("the page", "s => { const end = performance.now() + 1000 * s; "
+                             "while (performance.now() < end); }"),
+                ("its render loop", "s => { const raf = window.requestAnimationFrame; "
+                                    "const end = performance.now() + 1000 * s; "
+                                    "window.requestAnimationFrame = f => { const late = "
+                                    "end - performance.now(); return late > 0 ? "
+                                    "setTimeout(() => raf(f), late) : raf(f); }; }")):
+            wait_for(lambda: is_fresh(page), 15, "the badge fresh",
+                     lambda: str(freshness(page)))
+            badge, clients = freshness(page), set(page_ui.server.get_clients())
+            page.evaluate(hold_up, HOLD_UP_S)
+            wait_for(lambda b=badge: freshness(page)["staleAt"] != b["staleAt"], HOLD_UP_S + 5,
+                     f"{held} held up: the badge stale")
+            wait_for(lambda: is_fresh(page), HOLD_UP_S + 10, f"{held} fresh again",
+                     lambda: str(freshness(page)))
+            time.sleep(1.0)  # the display ticks every 0.1 s: a reconnect was forced by now
+            assert freshness(page)["reconnects"] == badge["reconnects"], (held, freshness(page))
+            assert set(page_ui.server.get_clients()) == clients, f"{held}: connected again"
     finally:
         page.context.close()
 

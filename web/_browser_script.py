@@ -56,8 +56,11 @@ arrived (its own clock), so the badge measures what the operator sees, whether
 the GCS's loop stalled (the beats say their data is old) or the viewer's
 connection did (no beat comes). A beat is applied with the page's other
 messages, in its render loop, so a page that stopped applying what it receives
-reads as stale too. After :data:`RECONNECT_AFTER_S` without a beat the script
-forces a reconnect, then again with a doubling back-off (at most every
+reads as stale too. After :data:`RECONNECT_AFTER_S` without a beat, and with nothing
+at all arriving over the socket, the script forces a reconnect (a page the machine held
+up, whose render loop has not applied what came meanwhile, keeps its socket: the
+display's own late tick is not counted as the server's silence), then again with a
+doubling back-off (at most every
 :data:`RECONNECT_MAX_S`): viser's page keeps its websocket in a Worker and
 retries only once its socket closed, and only while the window has the focus,
 so a half-open socket (nothing arrives, nothing closes) or a window in the
@@ -131,8 +134,8 @@ BEAT_PERIOD_S = 0.25
 """The server beats to every viewer with each loop tick (4 Hz) and at least this often, s."""
 
 RECONNECT_AFTER_S = 3.0
-"""Without a beat for this long the page forces a reconnect, s (then with a doubling
-back-off, at most every :data:`RECONNECT_MAX_S`)."""
+"""Without a beat, and with nothing arriving over the socket, for this long the page forces
+a reconnect, s (then with a doubling back-off, at most every :data:`RECONNECT_MAX_S`)."""
 
 RECONNECT_MAX_S = 15.0
 """The longest wait between two forced reconnects, s."""

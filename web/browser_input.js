@@ -189,9 +189,13 @@
   // how old the page's data is: the server's beat (web._browser_script.beat) brings the
   // GCS time of its latest tick and that tick's age when the beat left; the page adds the
   // time since the beat was applied (by viser's message queue, in the render loop)
+  // heard: when the socket last brought anything (the Worker's messages, before the render
+  // loop applies them); tick: when the display last ran (a late one: the page itself was
+  // held up, by a busy machine, and the socket's news may still be queued behind it)
   const fresh = {at: performance.now(), age: 0, t: null, beats: 0, stale: null,
                  forcedAt: -Infinity, backoff: CFG.fresh.reconnect, reconnects: 0,
-                 worker: null, asking: false, due: null};
+                 worker: null, asking: false, due: null, heard: performance.now(),
+                 tick: performance.now()};
   st.fresh = fresh;
   const badge = document.createElement("div");
   badge.dataset.gcs = "freshness";
@@ -217,7 +221,10 @@
       get() {
         const data = getData.get.call(this);
         if (data && this.target instanceof Worker &&
-            /^(message_batch|connected|closed)$/.test(data.type)) fresh.worker = this.target;
+            /^(message_batch|connected|closed)$/.test(data.type)) {
+          fresh.worker = this.target;
+          if (data.type === "message_batch") fresh.heard = performance.now();
+        }
         return data;
       }});
   }
@@ -238,7 +245,12 @@
   const secs = (x) => (x < 10 ? x.toFixed(1) : String(Math.round(x)));
   function freshness() {
     const now = performance.now();
+    const held = now - fresh.tick > 1000 * CFG.fresh.stale;  // the page could not run
+    fresh.tick = now;
     const silent = (now - fresh.at) / 1000;
+    // the socket is given up only when nothing came over it: news the render loop has not
+    // applied yet (a busy machine) is no dead socket; nor is the page's own hold-up
+    const quiet = Math.min(silent, (now - fresh.heard) / 1000);
     const age = silent + fresh.age;
     const stale = age > CFG.fresh.stale;
     if (stale !== fresh.stale) {
@@ -247,14 +259,14 @@
       badge.dataset[stale ? "gcsStaleAt" : "gcsFreshAt"] = String(Date.now());
       badge.style.cssText = CFG.fresh.style + (stale ? CFG.fresh.bad : CFG.fresh.ok);
     }
-    if (silent > CFG.fresh.reconnect && now - fresh.forcedAt > 1000 * fresh.backoff) {
+    if (!held && quiet > CFG.fresh.reconnect && now - fresh.forcedAt > 1000 * fresh.backoff) {
       fresh.forcedAt = now;
       fresh.backoff = Math.min(2 * fresh.backoff, CFG.fresh.reconnectMax);
       reconnect();
     }
     badge.textContent = !stale ? "data " + age.toFixed(1) + " s old"
       : "STALE — no update for " + secs(age) + " s" +
-        (silent > CFG.fresh.reconnect ? " (reconnecting)" : "");
+        (quiet > CFG.fresh.reconnect ? " (reconnecting)" : "");
   }
   freshness();
   setInterval(freshness, CFG.fresh.every);
