@@ -60,8 +60,8 @@ reads as stale too. After :data:`RECONNECT_AFTER_S` without a beat, and with not
 at all arriving over the socket, the script forces a reconnect (a page the machine held
 up, whose render loop has not applied what came meanwhile, keeps its socket: the
 display's own late tick is not counted as the server's silence), then again with a
-doubling back-off (at most every
-:data:`RECONNECT_MAX_S`): viser's page keeps its websocket in a Worker and
+doubling back-off (at most every :data:`RECONNECT_MAX_S`): viser's page keeps its
+websocket in a Worker and
 retries only once its socket closed, and only while the window has the focus,
 so a half-open socket (nothing arrives, nothing closes) or a window in the
 background would stay frozen. The script learns the Worker from its messages
