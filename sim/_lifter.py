@@ -8,10 +8,13 @@ an interpreter of its own and imports nothing but the standard library (it
 starts in a few tens of milliseconds): ``python sim/_lifter.py SHARED TID``.
 
 It shares a few numbers with the stepping process through a small file
-mapped into both (:data:`LAYOUT`): when the stepping thread is in the
-background and the chunk it steps is overdue by more than ``lag``, it
-sets the thread's policy back to normal (allowed to a process that may raise
-priorities, as the stepping one checked) and says so there.
+mapped into both (:data:`LAYOUT`): when the chunk the stepping thread steps
+is overdue by more than ``lag`` and the thread is in the background, it sets
+the thread's policy back to normal (allowed to a process that may raise
+priorities, as the stepping one checked) and says so there. Whether the
+thread is in the background it asks the kernel, not a shared flag: a flag
+written beside the policy change would leave a window where the thread
+starves in the background with the flag still saying it is not.
 """
 
 from __future__ import annotations
@@ -22,10 +25,10 @@ import struct
 import sys
 import time
 
-LAYOUT = struct.Struct("<ddddqqqq")
+LAYOUT = struct.Struct("<ddddqqq")
 """due (monotonic s, inf when not paced), lag (s), period (s), lifted_at (monotonic s),
-background (0/1), lifts, stop (0/1), ready (0/1)."""
-DUE, LAG, PERIOD, LIFTED_AT, BACKGROUND, LIFTS, STOP, READY = range(8)
+lifts, stop (0/1), ready (0/1)."""
+DUE, LAG, PERIOD, LIFTED_AT, LIFTS, STOP, READY = range(7)
 
 
 def read(shared: mmap.mmap) -> list[float | int]:
@@ -52,14 +55,16 @@ def watch(path: str, tid: int) -> None:
         if values[STOP] or os.getppid() != parent:
             return
         now = time.monotonic()
-        if values[BACKGROUND] and now - float(values[DUE]) > float(values[LAG]):
-            try:
-                os.sched_setscheduler(tid, os.SCHED_OTHER, os.sched_param(0))
-            except OSError:  # the thread is gone
-                return
-            write(shared, LIFTED_AT, now)
-            write(shared, BACKGROUND, 0)
-            write(shared, LIFTS, int(values[LIFTS]) + 1)
+        if now - float(values[DUE]) <= float(values[LAG]):
+            continue
+        try:
+            if os.sched_getscheduler(tid) != os.SCHED_IDLE:
+                continue
+            write(shared, LIFTED_AT, now)  # before the lift: the thread reads it once lifted
+            os.sched_setscheduler(tid, os.SCHED_OTHER, os.sched_param(0))
+        except OSError:  # the thread is gone
+            return
+        write(shared, LIFTS, int(values[LIFTS]) + 1)
 
 
 if __name__ == "__main__":

@@ -74,6 +74,14 @@ def set_background(background: bool, tid: int = 0) -> bool:
     return True
 
 
+def _policy(tid: int) -> int | None:
+    """Thread ``tid``'s scheduling policy (0: the calling thread); None where unknown."""
+    try:
+        return os.sched_getscheduler(tid)
+    except (AttributeError, OSError):  # not Linux, or a thread that exited
+        return None
+
+
 def can_lift() -> bool:
     """Whether a thread put in the background may return to normal priority here.
 
@@ -112,7 +120,8 @@ class BackgroundStepping:
     @property
     def background(self) -> bool:
         """Whether the stepping thread runs in the background now."""
-        return self._shared is not None and bool(_lifter.read(self._shared)[_lifter.BACKGROUND])
+        return self._shared is not None and self._tid is not None \
+            and _policy(self._tid) == _IDLE
 
     @property
     def lifts(self) -> int:
@@ -130,8 +139,7 @@ class BackgroundStepping:
         tid = threading.get_native_id()
         with tempfile.NamedTemporaryFile(dir=_SHARED_DIR if os.path.isdir(_SHARED_DIR)
                                          else None, prefix="sim-lifter-") as f:
-            f.write(_lifter.LAYOUT.pack(math.inf, self._lag, self._period, -math.inf, 0, 0, 0,
-                                        0))
+            f.write(_lifter.LAYOUT.pack(math.inf, self._lag, self._period, -math.inf, 0, 0, 0))
             f.flush()
             shared = mmap.mmap(f.fileno(), _lifter.LAYOUT.size)
             watchdog = subprocess.Popen([sys.executable, "-I", "-S", _lifter.__file__, f.name,
@@ -145,10 +153,7 @@ class BackgroundStepping:
                     return False
                 time.sleep(0.005)
         self._tid, self._shared, self._watchdog = tid, shared, watchdog
-        if not set_background(True):
-            return False
-        _lifter.write(shared, _lifter.BACKGROUND, 1)
-        return True
+        return set_background(True)
 
     def set_due(self, due: float | None) -> None:
         """From the stepping thread: the chunk it steps is due at monotonic time ``due``
@@ -163,11 +168,10 @@ class BackgroundStepping:
         if shared is None:
             return
         values = _lifter.read(shared)
-        if values[_lifter.BACKGROUND] or values[_lifter.STOP] \
+        if values[_lifter.STOP] or _policy(0) == _IDLE \
                 or time.monotonic() - float(values[_lifter.LIFTED_AT]) < self._stay_lifted:
             return
-        if set_background(True):
-            _lifter.write(shared, _lifter.BACKGROUND, 1)
+        set_background(True)
 
     def close(self) -> None:
         """Stop watching and leave the stepping thread at normal priority; idempotent."""
@@ -181,8 +185,7 @@ class BackgroundStepping:
             watchdog.kill()
             watchdog.wait()
         self._lifts = int(_lifter.read(shared)[_lifter.LIFTS])
-        if _lifter.read(shared)[_lifter.BACKGROUND]:
-            assert self._tid is not None
+        if self._tid is not None and _policy(self._tid) == _IDLE:
             set_background(False, self._tid)
         self._shared = self._watchdog = None
         shared.close()

@@ -98,6 +98,26 @@ def test_the_stepping_thread_is_lifted_while_behind_and_returns_when_ahead() -> 
     assert after_close == [os.SCHED_OTHER]
 
 
+@needs_lift
+def test_a_starved_thread_is_lifted_however_it_went_to_the_background() -> None:
+    # the watchdog asks the kernel: a thread that went back to the background just as
+    # it was lifted (a race between keeping_up and the watchdog) is lifted again
+    stepping = BackgroundStepping(lag_s=0.05, watch_period_s=0.005, stay_lifted_s=0.0)
+
+    def body(done: threading.Event) -> None:
+        assert stepping.start()
+        stepping.set_due(time.monotonic() - 0.1)  # starved from the start
+        done.wait(5.0)
+        stepping.close()
+
+    with _on_a_thread(body) as tid:
+        assert _until(lambda: stepping.lifts == 1)
+        assert _policy(tid[0]) == os.SCHED_OTHER
+        assert sim._priority.set_background(True, tid[0])  # behind the watchdog's back
+        assert _until(lambda: stepping.lifts == 2)
+        assert _policy(tid[0]) == os.SCHED_OTHER and not stepping.background
+
+
 def test_a_thread_that_could_not_come_back_is_never_put_in_the_background(
         monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(sim._priority, "can_lift", lambda: False)
