@@ -61,10 +61,12 @@ def _team(tmp_path: Path, **changes: dict[str, float]) -> Path:
     return path
 
 
-def test_the_square_is_flown_on_two_seeds_and_held_to_its_analysis() -> None:
-    """The paper flight on the two seeds that came nearest the bounds (share and tension
-    on seed 3, span on seed 2): every figure within the certificate."""
-    out = run_gcs("analyze", SQUARE, "--verify", "--seeds", "2-3", "--jobs", "2")
+def test_the_square_is_flown_and_held_to_its_analysis() -> None:
+    """The paper flight on seed 2, which came nearest the bounds of seeds 1-3 in tension,
+    tilt, span and distance error (share: seed 3, 0.286 against 0.411): every figure
+    within the certificate. Several seeds in parallel, and the worst of them taken, are
+    test_fly_seeds' and the comparison's tests below."""
+    out = run_gcs("analyze", SQUARE, "--verify", "--seeds", "2")
     assert out.returncode == 0, out.stdout + out.stderr
     rows = _rows(out.stdout)
     assert list(rows) == [f.label for f in FIGURES], out.stdout
@@ -86,11 +88,11 @@ def test_the_square_is_flown_on_two_seeds_and_held_to_its_analysis() -> None:
                                                              abs=5e-4)
     assert predicted["distance error <= safe deformation"] == pytest.approx(
         analysis["safe_deformation"]["margin_m"], abs=5e-4)
-    for r in rows.values():  # each row's margin is its bound less the worst of both seeds
+    for r in rows.values():  # each row's margin is its bound less the measured figure
         assert float(r["margin"]) == pytest.approx(
             float(r["predicted"]) - float(r["measured"]), abs=2e-3)
         assert r["verdict"] == ("OK" if float(r["margin"]) >= 0 else "EXCEEDED")
-        assert r["seed"] in ("2", "3")
+        assert r["seed"] == "2"
     # the payload was carried (the paper's square hangs a quarter of it on each rope, a
     # little more while it swings) and no vehicle came near the analysis' load bounds
     share = float(rows[FIGURES[0].label]["measured"])
@@ -100,8 +102,7 @@ def test_the_square_is_flown_on_two_seeds_and_held_to_its_analysis() -> None:
         assert rows[label]["verdict"] == "OK", out.stdout
     assert all(r["verdict"] == "OK" for r in rows.values()), out.stdout
     assert "result: OK" in out.stdout
-    assert "seed 2 completed" in out.stderr and "seed 3 completed" in out.stderr
-    assert "2 at a time" in out.stdout
+    assert "seed 2 completed" in out.stderr
 
 
 def test_a_flight_beyond_a_tiny_safe_deformation_fails_naming_the_figure(
