@@ -9,7 +9,14 @@ its pytest commands in turn) and
 stops the hogs. Prints a line per run, then one JSON object on the last line:
 
     {"runs": 3, "hogs": 2, "command": "...", "passed": [true, ...],
-     "wall_s": [...], "failed": [[...], ...]}
+     "wall_s": [...], "cpu_s": [...], "reference_s": 0.23, "failed": [[...], ...]}
+
+``cpu_s`` is the CPU time of the suite's processes (the commands and every process
+they waited for: workers, simulators, browsers), the hogs' not counted: the work the
+suite asks of the machine. ``reference_s`` is the CPU time of a fixed pure-Python
+workload measured before the runs, best of five: this shared VM's speed changes
+from hour to hour (the same commit's suite took 772 and 1007 CPU-s a day apart), so
+wall and CPU times are comparable across days only as multiples of it.
 
 Each run's whole output is kept in ``--keep`` (default: a temporary directory, named
 on the run's line) for the failures' tracebacks. Exit status 1 unless every run passed.
@@ -21,6 +28,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import resource
 import shlex
 import subprocess
 import sys
@@ -51,15 +59,33 @@ def with_workers(argv: list[str], workers: int) -> list[str]:
     return kept + (["-n", str(workers)] if workers > 1 else [])
 
 
+def reference_s() -> float:
+    """CPU seconds of a fixed pure-Python workload, the best of five: the machine's
+    speed at the moment (0.22-0.24 s on the 2-core VM of docs/performance.md, 2026-12-05)."""
+    best = float("inf")
+    for _ in range(5):
+        start = time.process_time()
+        table: dict[int, int] = {}
+        for i in range(2_000_000):
+            table[i % 1009] = table.get(i % 1009, 0) + i * i
+        best = min(best, time.process_time() - start)
+    return best
+
+
+def _children_cpu_s() -> float:
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
 def run_once(commands: list[list[str]], hog_count: int,
-             keep: Path) -> tuple[bool, float, list[str]]:
+             keep: Path) -> tuple[bool, float, float, list[str]]:
     """One run of the suite (each of ``commands`` in turn, as the README's ``&&`` chain:
     a failed one stops it) beside ``hog_count`` hogs, its output written to ``keep``:
-    passed, wall seconds, failures."""
+    passed, wall seconds, CPU seconds (the hogs' not counted), failures."""
     busy = hogs(hog_count)
     text, ok = "", True
     try:
-        started = time.monotonic()
+        started, cpu0 = time.monotonic(), _children_cpu_s()
         for argv in commands:
             out = subprocess.run(argv, cwd=ROOT, capture_output=True, text=True, check=False)
             text += out.stdout + out.stderr
@@ -68,7 +94,7 @@ def run_once(commands: list[list[str]], hog_count: int,
             if out.returncode != 0:
                 ok = False
                 break
-        wall = time.monotonic() - started
+        wall, cpu = time.monotonic() - started, _children_cpu_s() - cpu0  # hogs not yet waited
     finally:
         for p in busy:
             p.kill()
@@ -76,7 +102,7 @@ def run_once(commands: list[list[str]], hog_count: int,
     keep.write_text(text)
     failed = [line.split(" - ")[0] for line in text.splitlines()
               if line.startswith(("FAILED ", "ERROR "))]
-    return ok, wall, failed
+    return ok, wall, cpu, failed
 
 
 def main() -> int:
@@ -93,17 +119,23 @@ def main() -> int:
     keep.mkdir(parents=True, exist_ok=True)
     commands = [with_workers(argv, args.workers) for argv in pytest_commands()]
     command = " && ".join(shlex.join(argv) for argv in commands)
+    reference = reference_s()
+    print(f"reference workload: {reference:.3f} CPU-s (the machine's speed now)", flush=True)
     summary: dict[str, object] = {"runs": args.runs, "hogs": args.hogs, "command": command}
-    passed, walls, failures = [], [], []
+    passed, walls, cpus, failures = [], [], [], []
     for k in range(args.runs):
         print(f"run {k + 1}/{args.runs}: {command} beside {args.hogs} hog(s)", flush=True)
-        ok, wall, failed = run_once(commands, args.hogs, keep / f"run{k + 1}.log")
+        ok, wall, cpu, failed = run_once(commands, args.hogs, keep / f"run{k + 1}.log")
         passed.append(ok)
         walls.append(round(wall, 1))
+        cpus.append(round(cpu, 1))
         failures.append(failed)
-        print(f"run {k + 1}/{args.runs}: {'passed' if ok else 'FAILED'} in {wall:.0f} s"
+        print(f"run {k + 1}/{args.runs}: {'passed' if ok else 'FAILED'} in {wall:.0f} s "
+              f"({wall / reference:.0f} references), {cpu:.0f} CPU-s "
+              f"({cpu / reference:.0f} references)"
               + "".join(f"\n  {f}" for f in failed), flush=True)
-    summary |= {"passed": passed, "wall_s": walls, "failed": failures}
+    summary |= {"passed": passed, "wall_s": walls, "cpu_s": cpus,
+                "reference_s": round(reference, 4), "failed": failures}
     print(json.dumps(summary))
     return 0 if all(passed) else 1
 
