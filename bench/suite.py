@@ -15,7 +15,7 @@ stops the hogs. Prints a line per run, then one JSON object on the last line:
 they waited for: workers, simulators, browsers), the hogs' not counted: the work the
 suite asks of the machine. ``reference_s`` is the CPU time of a fixed pure-Python
 workload measured before the runs, best of five: this shared VM's speed changes
-from hour to hour (the same commit's suite took 772 and 1007 CPU-s a day apart), so
+from hour to hour (nearly the same suite took 772 and 1007 CPU-s a few hours apart), so
 wall and CPU times are comparable across days only as multiples of it.
 
 Each run's whole output is kept in ``--keep`` (default: a temporary directory, named
