@@ -7,9 +7,11 @@ viewer, so what the server sends is really serialised, received and decoded.
 from __future__ import annotations
 
 import collections
+import contextlib
 import re
 import threading
 import time
+import warnings
 from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -257,6 +259,65 @@ def test_every_viewer_gets_a_beat_with_the_loops_ticks() -> None:
             for viewer in viewers:
                 viewer.close()
             ui.close()
+
+
+def slow_departure(monkeypatch: pytest.MonkeyPatch, page: type[WebUi] | type[ReplayUi],
+                   seconds: float) -> threading.Event:
+    """Make ``page`` learn of a departed viewer ``seconds`` late (viser closes the viewer's
+    buffer first, then calls the page): the event is set when the page was told."""
+    told = threading.Event()
+    original = page._on_disconnect
+
+    def late(self: WebUi | ReplayUi, client: viser.ClientHandle) -> None:
+        time.sleep(seconds)
+        original(self, client)  # type: ignore[arg-type]
+        told.set()
+
+    monkeypatch.setattr(page, "_on_disconnect", late)
+    return told
+
+
+@pytest.mark.parametrize("when", ["before its frame", "during its frame"])
+@pytest.mark.parametrize("page", ["live", "replay"])
+def test_a_viewer_that_left_is_not_written_to(monkeypatch: pytest.MonkeyPatch, page: str,
+                                              when: str, tmp_path: Path) -> None:
+    """A closed tab is not an error: between viser closing a departed viewer's buffer and
+    calling the page's disconnect callback, the drawing loop wrote to that viewer (its
+    camera, its panel, its beat), and viser warned on the GCS's stderr ("Queued a
+    RunJavascriptMessage on a closed connection"). Made a second long here; "during its
+    frame": the viewer leaves after the page checked it was there (the check lies)."""
+    told = slow_departure(monkeypatch, WebUi if page == "live" else ReplayUi, 1.0)
+    if when == "during its frame":
+        monkeypatch.setattr(f"web.{'_ui' if page == 'live' else '_replay_page'}.viewer_gone",
+                            lambda client: False)
+    with contextlib.ExitStack() as stack:
+        if page == "live":
+            app = stack.enter_context(GcsApp(TEAM, zenoh_settings=ZenohSettings(
+                mode="peer", connect=())))
+            ui: WebUi | ReplayUi = WebUi(app, port=free_tcp_port())
+        else:
+            log = FlightLog.load(ardupilot_log(tmp_path / "ap.tlog", shared_origin=True))
+            ui = ReplayUi(log, name="ap", port=free_tcp_port())
+        stack.callback(ui.close)
+        ui.start()
+        if page == "replay":
+            ui.timeline.play()  # a playing replay draws and follows the team each period
+        viewer = BeatViewer(ui.server.get_port())
+        stack.callback(viewer.close)
+        client = connected_client(ui.server, viewer)
+        drawn = ui._panels if isinstance(ui, WebUi) else ui._views  # what the loop draws for
+        deadline = time.monotonic() + 10.0
+        while client.client_id not in drawn:
+            assert time.monotonic() < deadline, "the page never drew for the viewer"
+            time.sleep(0.02)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            viewer.close()
+            assert told.wait(10.0)
+            time.sleep(0.3)  # the drawing loop's next period, after the page was told
+        closed = [str(w.message) for w in caught if "closed connection" in str(w.message)]
+        assert not closed, closed
+        assert client.client_id not in ui.server.get_clients()
 
 
 class SlowRegistration(collections.deque):  # type: ignore[type-arg]

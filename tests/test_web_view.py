@@ -266,8 +266,11 @@ def test_a_page_the_machine_holds_up_keeps_its_socket(flight: GcsApp, page_ui: W
                      lambda: str(freshness(page)))
             badge, clients = freshness(page), set(page_ui.server.get_clients())
             page.evaluate(hold_up, HOLD_UP_S)
-            wait_for(lambda b=badge: freshness(page)["staleAt"] != b["staleAt"], HOLD_UP_S + 5,
-                     f"{held} held up: the badge stale")
+            if held == "its render loop":  # the display's ticks go on, the beats wait
+                wait_for(lambda b=badge: freshness(page)["staleAt"] != b["staleAt"],
+                         HOLD_UP_S + 5, f"{held} held up: the badge stale")
+            # (the whole page held up: the call returned after it; whether the badge shows
+            # STALE then is up to the browser: the late beats may be applied first)
             wait_for(lambda: is_fresh(page), HOLD_UP_S + 10, f"{held} fresh again",
                      lambda: str(freshness(page)))
             time.sleep(1.0)  # the display ticks every 0.1 s: a reconnect was forced by now

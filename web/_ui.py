@@ -51,7 +51,7 @@ from web._browser_script import (
 from web._camera import CENTRE_HOTKEY, CENTRE_LABEL
 from web._control_lock import ControlLock
 from web._events import EventLog
-from web._frame import TeamView, build_frame, frame_reach
+from web._frame import SceneFrame, TeamView, build_frame, frame_reach
 from web._history import History
 from web._link_quality import LinkQuality
 from web._panel import ControlPanel, abort_for
@@ -67,7 +67,7 @@ from web._status import (
     vehicles_html,
 )
 from web._trails import Trails
-from web._viser_threads import wake_on_loop
+from web._viser_threads import leaving_allowed, viewer_gone, wake_on_loop
 
 __all__ = ["UI_RATE_HZ", "WebUi", "page_url"]
 
@@ -225,12 +225,15 @@ class WebUi:
             self._actions.request(Action.ABORT)
 
     def _refresh_panels(self) -> None:
-        for panel in self._panel_list():
-            panel.refresh()
+        panels = self._panel_list()
+        with leaving_allowed(p.client for p in panels):
+            for panel in panels:
+                panel.refresh()
 
     def _panel_list(self) -> list[ControlPanel]:
+        """The panels of the viewers still connected."""
         with self._panels_lock:
-            return list(self._panels.values())
+            return [p for p in self._panels.values() if not viewer_gone(p.client)]
 
     def _control_text(self) -> str:
         holder = self._lock.holder
@@ -269,6 +272,13 @@ class WebUi:
             self._scene.draw(frame)
         self._frame_costs.append(time.perf_counter() - started)
         panels = self._panel_list()
+        with leaving_allowed(p.client for p in panels):
+            self._draw_panels(panels, frame, snap, came)
+
+    def _draw_panels(self, panels: list[ControlPanel], frame: SceneFrame,
+                     snap: RuntimeSnapshot | None, came: float) -> None:
+        """Each viewer's own part of a frame: its sticks read, its camera, its panel,
+        its beat."""
         self._write_sticks(panels)
         landed = snap is not None and snap.phase is Phase.LANDED
         reframe, self._landed_seen = landed and not self._landed_seen, landed
