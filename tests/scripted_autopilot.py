@@ -515,17 +515,29 @@ REF = Geo(47.397742, 8.545594, 488.0)
 
 
 def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
-        sock.bind(("127.0.0.1", 0))
-        return int(sock.getsockname()[1])
+    (port,) = free_udp_ports(1)
+    return port
+
+
+def free_udp_ports(n: int) -> list[int]:
+    """``n`` different UDP ports on 127.0.0.1 that were free a moment ago: held open
+    together while chosen (one at a time, the kernel may give a port just released
+    again: two vehicles on one port, seen in CI)."""
+    with contextlib.ExitStack() as stack:
+        socks = [stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+                 for _ in range(n)]
+        for sock in socks:
+            sock.bind(("127.0.0.1", 0))
+        return [int(sock.getsockname()[1]) for sock in socks]
 
 
 def square_team(profiles: Mapping[int, str], *, team_frame: TeamFrameConfig | None = None,
                 **limits: Any) -> Team:
     """The paper's square with a UDP link per vehicle on a free port (the profiles given)."""
     team = load_team(SQUARE)
-    links = tuple(LinkConfig(sysid=vid, transport=f"udpin:127.0.0.1:{free_udp_port()}",
-                             profile=profile) for vid, profile in profiles.items())
+    ports = free_udp_ports(len(profiles))
+    links = tuple(LinkConfig(sysid=vid, transport=f"udpin:127.0.0.1:{port}", profile=profile)
+                  for (vid, profile), port in zip(profiles.items(), ports, strict=True))
     cfg = dataclasses.replace(team.config, links=links,
                               team_frame=team_frame or TeamFrameConfig(),
                               limits=dataclasses.replace(team.config.limits, **limits))

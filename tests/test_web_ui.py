@@ -320,6 +320,20 @@ def test_a_viewer_that_left_is_not_written_to(monkeypatch: pytest.MonkeyPatch, p
         assert client.client_id not in ui.server.get_clients()
 
 
+def test_a_closed_replay_page_draws_nothing(tmp_path: Path) -> None:
+    """A viewer's callback may seek after the page closed (viser answers the page's own
+    slider writes too, from its thread pool): drawing then wrote to the stopped server,
+    and viser warned on stderr ("Queued a GuiUpdateMessage on a closed connection")."""
+    log = FlightLog.load(ardupilot_log(tmp_path / "ap.tlog", shared_origin=True))
+    ui = ReplayUi(log, name="ap", port=free_tcp_port())
+    ui.seek(ui.timeline.start + 1.0)
+    ui.close()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        ui.seek(ui.timeline.start + 2.0)
+    assert not [str(w.message) for w in caught], [str(w.message) for w in caught]
+
+
 class SlowRegistration(collections.deque):  # type: ignore[type-arg]
     """An asyncio.Event's waiters whose next registration (on viser's loop) takes 50 ms:
     the moment the loop thread is between finding the event clear and adding its

@@ -174,6 +174,8 @@ class ReplayUi:
         """Stop drawing and serving; idempotent."""
         self._stop.set()
         join_thread(self._thread, 2.0, what="the replay page's drawing loop")
+        with self._draw_lock:  # a viewer's callback drawing now ends first; later ones
+            pass               # see the page stopped (and viser's pool is not waited on here)
         self.server.stop()
 
     def seek(self, t: float) -> None:
@@ -289,6 +291,8 @@ class ReplayUi:
         overwritten by a time this thread read before the seek. ``only_moved``: nothing to
         do when the play head is where it was last drawn."""
         with self._draw_lock:
+            if self._stop.is_set():  # closed: a callback's late seek (viser answers our own
+                return               # slider writes too) must not write to a stopped server
             t = self.timeline.t
             if not (only_moved and t == self._shown_t):
                 self._draw(t)
