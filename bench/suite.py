@@ -30,6 +30,7 @@ import argparse
 import json
 import resource
 import shlex
+import signal
 import subprocess
 import sys
 import tempfile
@@ -115,6 +116,9 @@ def main() -> int:
                         help="pytest-xdist workers instead of the command's (default: as it is;"
                              " 1: one process)")
     args = parser.parse_args()
+    # stopped with SIGTERM (kill, a CI timeout): unwind, so the hogs and the suite's run
+    # are killed with it instead of loading the machine on their own
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
     keep = args.keep or Path(tempfile.mkdtemp(prefix="suite-"))
     keep.mkdir(parents=True, exist_ok=True)
     commands = [with_workers(argv, args.workers) for argv in pytest_commands()]
