@@ -27,7 +27,9 @@ on the run's line) for the failures' tracebacks. Exit status 1 unless every run 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
+import os
 import resource
 import shlex
 import signal
@@ -78,6 +80,21 @@ def _children_cpu_s() -> float:
     return usage.ru_utime + usage.ru_stime
 
 
+def _run(argv: list[str]) -> tuple[int, str, str]:
+    """Run one pytest command in a session of its own: stopped early (the bench killed),
+    its whole process group goes with it, xdist's workers and what they started too."""
+    proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, start_new_session=True)
+    try:
+        stdout, stderr = proc.communicate()
+    finally:
+        if proc.poll() is None:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    return proc.returncode, stdout, stderr
+
+
 def run_once(commands: list[list[str]], hog_count: int,
              keep: Path) -> tuple[bool, float, float, list[str]]:
     """One run of the suite (each of ``commands`` in turn, as the README's ``&&`` chain:
@@ -88,11 +105,11 @@ def run_once(commands: list[list[str]], hog_count: int,
     try:
         started, cpu0 = time.monotonic(), _children_cpu_s()
         for argv in commands:
-            out = subprocess.run(argv, cwd=ROOT, capture_output=True, text=True, check=False)
-            text += out.stdout + out.stderr
-            tail = out.stdout.strip().splitlines()[-1:] or ["(no output)"]
+            returncode, stdout, stderr = _run(argv)
+            text += stdout + stderr
+            tail = stdout.strip().splitlines()[-1:] or ["(no output)"]
             print(f"  {shlex.join(argv)}: {tail[0]} (output: {keep})", flush=True)
-            if out.returncode != 0:
+            if returncode != 0:
                 ok = False
                 break
         wall, cpu = time.monotonic() - started, _children_cpu_s() - cpu0  # hogs not yet waited
