@@ -32,7 +32,7 @@ from web._status import event_filter_html, events_html, vehicle_table_html
 from web._timeline import SPEEDS, Timeline
 from web._trails import Trails
 from web._ui import page_url
-from web._viser_threads import leaving_allowed, viewer_gone, wake_on_loop
+from web._viser_threads import leaving_allowed, wake_on_loop
 
 __all__ = ["ReplayUi", "replay_summary_html", "run_replay"]
 
@@ -208,7 +208,7 @@ class ReplayUi:
         reframe, self._reframe = self._reframe, False
         team_reach = frame_reach(frame)
         with self._views_lock:
-            views = [v for v in self._views.values() if not viewer_gone(v.client)]
+            views = list(self._views.values())
         with leaving_allowed(v.client for v in views):
             for view in views:
                 view.update(frame.centroid, team_reach, reframe=reframe)

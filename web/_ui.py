@@ -67,7 +67,7 @@ from web._status import (
     vehicles_html,
 )
 from web._trails import Trails
-from web._viser_threads import leaving_allowed, viewer_gone, wake_on_loop
+from web._viser_threads import leaving_allowed, wake_on_loop
 
 __all__ = ["UI_RATE_HZ", "WebUi", "page_url"]
 
@@ -231,9 +231,8 @@ class WebUi:
                 panel.refresh()
 
     def _panel_list(self) -> list[ControlPanel]:
-        """The panels of the viewers still connected."""
         with self._panels_lock:
-            return [p for p in self._panels.values() if not viewer_gone(p.client)]
+            return list(self._panels.values())
 
     def _control_text(self) -> str:
         holder = self._lock.holder

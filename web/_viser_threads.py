@@ -37,7 +37,7 @@ import viser
 from viser.infra import WebsockClientConnection
 from viser.infra._async_message_buffer import AsyncMessageBuffer
 
-__all__ = ["LoopEvent", "leaving_allowed", "viewer_gone", "wake_on_loop"]
+__all__ = ["LoopEvent", "leaving_allowed", "wake_on_loop"]
 
 
 class LoopEvent(asyncio.Event):
@@ -75,25 +75,15 @@ def _swap(buffer: AsyncMessageBuffer) -> None:
     old.set()  # a sender parked on the old event wakes, looks for messages, waits on the new
 
 
-def viewer_gone(client: viser.ClientHandle) -> bool:
-    """True once ``client``'s connection has closed, even before viser runs the page's
-    disconnect callbacks.
-
-    viser closes a departed viewer's buffer first and calls the callbacks after; a
-    write to the viewer in between is never delivered, and viser warns of it on
-    stderr ("Queued a ... on a closed connection"). The pages skip such a viewer:
-    closing a tab is not an error.
-    """
-    return bool(client._websock_connection.get_message_buffer().done)  # viser 1.1.1
-
-
 @contextlib.contextmanager
 def leaving_allowed(clients: Iterable[viser.ClientHandle]) -> Iterator[None]:
-    """Write to ``clients`` without viser's warning if one of them leaves meanwhile.
+    """Write to ``clients`` without viser's warning if one of them has left.
 
-    :func:`viewer_gone` is checked before a frame is drawn for a viewer; the viewer
-    may still close its tab while the frame is written. Those writes are dropped
-    with the connection, as viser drops a removal on a closed connection.
+    viser closes a departed viewer's buffer first and calls the page's disconnect
+    callbacks after; a frame drawn in between wrote to that viewer, and viser warned
+    on stderr ("Queued a ... on a closed connection"). Closing a tab is not an error:
+    those writes are dropped with the connection, as viser drops a removal on a
+    closed connection.
     """
     with contextlib.ExitStack() as stack:
         for client in clients:  # viser 1.1.1's own scope for writes that may find it closed
