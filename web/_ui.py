@@ -231,6 +231,7 @@ class WebUi:
                 panel.refresh()
 
     def _panel_list(self) -> list[ControlPanel]:
+        """The viewers' panels, copied under the lock (viser's threads add and remove them)."""
         with self._panels_lock:
             return list(self._panels.values())
 
