@@ -430,9 +430,14 @@ def test_the_sim_keeps_real_time_under_a_flood_of_oversize_payloads(
         for _ in range(5):
             pub.put(FLOOD)
 
+    # against the rate of the same moment without the flood: a loaded machine slows both
+    # (0.69 x real time was seen during a flood in a CI run of the whole suite); the flood
+    # once slowed the sim tenfold
+    quiet = sim_rate(rs, 2.0, lambda: None)
     rate = sim_rate(rs, 2.0, flood)
     pub.undeclare()
-    assert rate > 0.7, f"the sim ran at {rate:.2f} x real time during the flood"
+    assert rate > 0.6 * quiet, (
+        f"the sim ran at {rate:.2f} x real time during the flood, {quiet:.2f} before it")
     assert rs.sim.alive()
 
 

@@ -229,6 +229,19 @@ def unprivileged_chromium(directory: Path) -> Path:
     return wrapper
 
 
+SOFTWARE_DPR = 0.5
+"""The 3D view's pixel ratio in pages that watch a flight faster than real time (viser's
+``fixedDpr``): headless chromium draws WebGL on the CPU (SwiftShader), at a cost that
+grows with the pixels. A 1400x800 page at full ratio drew a moving sphere at 6 frames/s
+for 1.5 CPU-s/s; at 0.5, at its full 10 Hz for 0.65. The live demo's pages keep the full
+ratio: a user's page, whose colours :func:`scene_pixels` counts."""
+
+
+def page_url(url: str) -> str:
+    """``url`` of a live page, for a test browser: the 3D view at :data:`SOFTWARE_DPR`."""
+    return f"{url}{'&' if '?' in url else '?'}fixedDpr={SOFTWARE_DPR}"
+
+
 def headless_chromium(tmp_path_factory: pytest.TempPathFactory):  # type: ignore[no-untyped-def]
     """Headless Chromium, as an ordinary user's browser, until the generator is closed (the
     body of a module's ``browser`` fixture)."""

@@ -29,6 +29,7 @@ from tests.test_web_browser import (
     freshness,
     headless_chromium,
     is_fresh,
+    page_url,
     scene_pixels,
     wait_for,
 )
@@ -86,7 +87,7 @@ def open_viewer(browser, ui: WebUi):  # type: ignore[no-untyped-def]
     """A new browser page on the flight's page, and the server's handle of it."""
     before = set(ui.server.get_clients())
     page = browser.new_context(viewport={"width": 1400, "height": 800}).new_page()
-    page.goto(ui.url)
+    page.goto(page_url(ui.url))
     page.get_by_role("button", name="ABORT: hold, then land").wait_for(timeout=60_000)
     wait_for(lambda: bool(set(ui.server.get_clients()) - before), 10, "the viewer connected")
     new = max(set(ui.server.get_clients()) - before)  # the latest, had the page reconnected
