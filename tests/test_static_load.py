@@ -506,3 +506,16 @@ def worst_share_at(team: Team, accel_xy: np.ndarray, scale: float = 1.0) -> np.n
                                    np.zeros(team.formation.n)])
     return accelerating_load(anchors_ned, np.asarray(team.config.payload.lengths(team.formation.n)),
                              team.config.payload.mass, G, np.append(accel_xy, 0.0)).share
+
+
+def test_the_kernels_norms_and_cross_products_are_numpys_to_the_last_bit() -> None:
+    """The analysis's own norms and cross products (numpy's per-call cost was most of its
+    time) give numpy's results bit for bit: a certificate does not move with the speed-up."""
+    from gcs.analysis._static_load import _cross, _norm, _norms
+    rng = np.random.default_rng(3)
+    for _ in range(500):
+        a, b = rng.normal(size=3) * 10.0 ** rng.integers(-6, 6), rng.normal(size=3)
+        d = rng.normal(size=(int(rng.integers(1, 13)), 3))
+        assert _norm(a) == float(np.linalg.norm(a))
+        assert np.array_equal(_norms(d), np.linalg.norm(d, axis=1))
+        assert np.array_equal(_cross(a, b), np.cross(a, b))

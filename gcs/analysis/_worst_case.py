@@ -721,7 +721,7 @@ _ANALYSES_LOCK = threading.Lock()
 def analyze(team: Team) -> Analysis:
     """Run the worst-case analysis of a loaded team.
 
-    Once per team (0.6 s for the square): a loaded team is frozen, its analysis a
+    Once per team (0.3 s for the square): a loaded team is frozen, its analysis a
     function of its config alone, and the command line, the scenario check and the GCS
     each ask for the same team's."""
     with _ANALYSES_LOCK:
