@@ -76,6 +76,7 @@ def px4_sitl(tmp_path: Path) -> Iterator[Path]:
     pytest.fail("no free ports for the PX4 vehicles")
 
 
+@pytest.mark.long  # a flight at 1x on the wall clock, the CPU mostly idle: among the busy tests
 def test_gcs_fly_flies_a_scenario_on_px4_links_on_the_wall_clock(px4_sitl: Path) -> None:
     scenario = px4_sitl.parent / "short.yaml"
     scenario.write_text(yaml.safe_dump({"name": "px4", "steps": [
