@@ -23,7 +23,7 @@ import pytest
 import zenoh
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from gcs.app import free_tcp_port
+from gcs.app import SimProcess, SimStartError, _simprocess, free_tcp_port
 from gcs.common import to_mapping
 from gcs.config import load_team
 from gcs.testing import signed_connection, team_key
@@ -141,11 +141,11 @@ def lockstep_as_a_gcs(proc: subprocess.Popen[str], ready: str, fleet: str,
         # Without an ack the host stands at its first chunk (nothing runs before a GCS
         # acks, so what a GCS sees does not depend on when it joined), and keeps
         # repeating its clock so that a late GCS still learns where it is.
-        eventually(lambda: len(clock) > 0 and clock[-1][0] - clock[0][0] > 0.5,
+        # (not "n in the last half second": beside two CPU hogs a waiting host's republish
+        # came 0-8 times a half second, in bursts, with or without zenoh's express)
+        eventually(lambda: len(clock) >= 3 and clock[-1][0] - clock[0][0] > 0.5,
                    "clock samples while waiting")
-        assert max(t for _, t in clock) == pytest.approx(CHUNK)
-        waiting = [t for w, t in clock if w > clock[-1][0] - 0.5]
-        assert len(waiting) >= 3 and set(waiting) == {CHUNK}
+        assert {t for _, t in clock} == {CHUNK}, clock
         # each sample says how many truth samples, and payloads of every vehicle, the host
         # has published so far
         assert set(announced[-1]) == {1, 2, 3, 4} and truth_count[-1] == len(truth) == 0
@@ -299,3 +299,21 @@ def test_a_simulator_that_works_past_its_timeout_is_waited_for_and_a_runaway_is_
         SimProcess(CONFIG, endpoint=endpoint, ready_timeout=0.5,
                    wrap=lambda *cmd: [sys.executable, "-c", "while True: pass"])
     assert time.monotonic() - start < 10.0
+
+
+def test_a_simulator_whose_port_was_taken_before_it_bound_it_starts_on_another(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The race of a port picked free and bound by another process before the simulator
+    (seen with flights side by side on a loaded machine): ``on_free_port`` picks another;
+    given one attempt it says what happened."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        picks = itertools.chain([port], iter(free_tcp_port, None))
+        monkeypatch.setattr(_simprocess, "free_tcp_port", lambda: next(picks))
+        with SimProcess.on_free_port(CONFIG, speed="max", lockstep=True) as sim:
+            assert sim.alive() and sim.endpoint != f"tcp/127.0.0.1:{port}", sim.endpoint
+        picks = itertools.chain([port], iter(free_tcp_port, None))
+        with pytest.raises(SimStartError, match=f"127.0.0.1:{port}.*Address already in use"):
+            SimProcess.on_free_port(CONFIG, speed="max", lockstep=True, attempts=1)

@@ -17,7 +17,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from gcs.app import GcsApp, SimProcess, free_tcp_port
+from gcs.app import GcsApp, SimProcess
 from gcs.common import LOCAL_CONFIGS, default_config, stop_on_signals
 from gcs.config import load_team, signing_line
 from gcs.loop import Action, Gamepad, PhaseError, load_gamepad_config
@@ -117,13 +117,12 @@ def run_demo(config: str, *, host: str, port: int, gamepad: Path | None,
     if insecure:
         team = team.without_signing()
     _say(signing_line(team.config.gcs, Path(team.source).parent))
-    endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
-    _say(f"starting the simulated team of {team.source} on {endpoint}…")
-    with SimProcess(team.source, endpoint=endpoint, speed="1",
-                    signing=team.config.gcs.signing, ready_timeout=180.0, progress=_say,
-                    fork_server=False) as sim:  # one simulator: a fork server saves nothing
+    _say(f"starting the simulated team of {team.source}…")
+    with SimProcess.on_free_port(team.source, speed="1", signing=team.config.gcs.signing,
+                                 ready_timeout=180.0, progress=_say,
+                                 fork_server=False) as sim:  # one simulator: no fork server
         _say(sim.ready_line)
-        settings = ZenohSettings(mode="peer", connect=(endpoint,))
+        settings = ZenohSettings(mode="peer", connect=(sim.endpoint,))
         with GcsApp(team, zenoh_settings=settings, override_analysis=override_analysis) as app:
             code = serve(app, host=host, port=port, gamepad=gamepad, no_gamepad=no_gamepad,
                          alive=sim.alive)

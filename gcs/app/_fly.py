@@ -26,7 +26,7 @@ from pathlib import Path
 from gcs.analysis import analyze
 from gcs.app._app import GcsApp
 from gcs.app._scenario import Scenario, ScenarioError, Step, play, play_step
-from gcs.app._simprocess import SimProcess, free_tcp_port
+from gcs.app._simprocess import SimProcess
 from gcs.common import ConfigError
 from gcs.config import Team, seal_key, signing_line
 from gcs.flightlog import FlightMetrics
@@ -157,12 +157,11 @@ class HeadlessFlight:
         if self.real:
             lockstep = False
         elif connect is None:
-            self.endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
-            self.sim = SimProcess(team, endpoint=self.endpoint, speed=speed or "max",
-                                  lockstep=lockstep, signing=team.config.gcs.signing,
-                                  extra=("--seed", str(seed),
-                                         *(() if gusts is None else ("--gusts", repr(gusts)))),
-                                  ready_timeout=ready_timeout, fork_server=fork_server)
+            self.sim = SimProcess.on_free_port(
+                team, speed=speed or "max", lockstep=lockstep, signing=team.config.gcs.signing,
+                extra=("--seed", str(seed), *(() if gusts is None else ("--gusts", repr(gusts)))),
+                ready_timeout=ready_timeout, fork_server=fork_server)
+            self.endpoint = self.sim.endpoint
         else:
             if speed is not None:
                 raise ConfigError("--speed", "", f"paces a simulator started here; the one "

@@ -20,7 +20,7 @@ import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import IO
+from typing import IO, Any
 
 from gcs.app._simfork import ForkedSim, fork_server_enabled, fork_sim
 from gcs.common import die_with_parent, to_mapping
@@ -79,6 +79,10 @@ class _Busy:
 
     def used(self) -> float | None:
         return self._samples[-1][1] if self._samples else None
+
+
+_PORT_TAKEN = "Address already in use"
+"""What a simulator says (zenoh's listener error) when its port was taken before it bound it."""
 
 
 class SimStartError(RuntimeError):
@@ -176,6 +180,22 @@ class SimProcess:
                 detail = " | ".join(self._err[-5:]) or "no output"
                 raise SimStartError(f"the simulator {why}: {detail}" if why[0] == "w"
                                     else f"the simulator {why} before it was ready: {detail}")
+
+    @classmethod
+    def on_free_port(cls, config: str | Path | Team, *, attempts: int = 3,
+                     **options: Any) -> SimProcess:
+        """A simulator listening on a free loopback port (its :attr:`endpoint`), with
+        ``options`` as the constructor's. :func:`free_tcp_port` is free only a moment:
+        another process may bind it before the simulator does (a seed's simulator lost
+        its port so, flights running side by side on a loaded machine); then another
+        port, up to ``attempts`` in all."""
+        for attempt in range(1, attempts + 1):
+            try:
+                return cls(config, endpoint=f"tcp/127.0.0.1:{free_tcp_port()}", **options)
+            except SimStartError as exc:
+                if _PORT_TAKEN not in str(exc) or attempt == attempts:
+                    raise
+        raise AssertionError("unreachable")
 
     def _pump(self, stream: IO[str], to_queue: bool) -> None:
         for line in stream:
