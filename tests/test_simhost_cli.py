@@ -267,9 +267,6 @@ def test_a_slow_start_is_said_not_silent() -> None:
     """The first ``gcs demo`` sat 68 s silent while the kernels compiled: it looked hung.
     A simulator that is not ready yet is now told every few seconds (here one that never
     becomes ready: a shell that sleeps, in the simulator's place)."""
-    from gcs.app import SimProcess
-    from gcs.app._simprocess import SimStartError
-
     said: list[str] = []
     with pytest.raises(SimStartError, match=r"was not ready after [67] s \(idle"):
         SimProcess(CONFIG, endpoint=f"tcp/127.0.0.1:{free_tcp_port()}", ready_timeout=6.0,
@@ -283,9 +280,6 @@ def test_a_simulator_that_works_past_its_timeout_is_waited_for_and_a_runaway_is_
     machine where other processes take most of the cores (seen beside two CPU hogs). A
     starting simulator whose CPU time grows is waited for, up to five times its timeout;
     one that spins without ever being ready is given up at that ceiling."""
-    from gcs.app import SimProcess
-    from gcs.app._simprocess import SimStartError
-
     # busy for 3 s of wall time, then ready: past its 2 s timeout, and within the 10 s
     # ceiling however little of a core it gets (2.5 s of CPU were not done in 10 s beside
     # two CPU hogs)
