@@ -37,6 +37,8 @@ Modules:
     ``_profile_sim``        Profile of the simulated vehicles (this repository's onboard
                             autopilot).
     ``_profiles``           Choosing an autopilot profile by its configured name.
+    ``_setpoint_stream``    A team's setpoint stream: vertical channels, packing, batching,
+                            gaps and re-sends between ticks.
 """
 
 from gcs.link._discovery import Presence, PresenceEvent
@@ -49,6 +51,7 @@ from gcs.link._manager import LinkManager
 from gcs.link._params import ParamClient, ParamValue
 from gcs.link._profile import AutopilotProfile
 from gcs.link._profiles import make_profile
+from gcs.link._setpoint_stream import SetpointStream
 
 __all__ = [
     "AutopilotProfile",
@@ -63,6 +66,7 @@ __all__ = [
     "ParamValue",
     "Presence",
     "PresenceEvent",
+    "SetpointStream",
     "install_signing_key",
     "make_profile",
 ]

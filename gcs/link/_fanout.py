@@ -1,13 +1,11 @@
 """One frame to each of many links at once: the loop's setpoints for a whole fleet.
 
-Why: sent link by link (each frame numbered and checksummed by its link's
-encoder, :meth:`~gcs.wire.MavlinkEncoder.restamp`), a hundred
-setpoints cost the loop about 1.7 ms, three quarters of it Python around the
-zenoh publications; numbered and checksummed in one compiled pass
-(:class:`~gcs.wire.EncoderBatch`) and published in one loop, 0.45-0.6 ms,
-of which the hundred zenoh publications are 0.3 ms (bench/gcs_tick.py). The
-frames are the ones each link would send on its own: same sequence numbers,
-signatures, frame listeners (the recorder) and errors.
+Why: sent link by link, each frame numbered and checksummed by its link's encoder
+(:meth:`~gcs.wire.MavlinkEncoder.restamp`), a fleet's setpoints cost the loop several
+times what one compiled pass over all of them costs (:class:`~gcs.wire.EncoderBatch`;
+the figures are in docs/performance.md, ``bench/gcs_tick.py``). The frames are the ones
+each link would send on its own: same sequence numbers, signatures, frame listeners
+(the recorder) and errors.
 """
 
 from __future__ import annotations
@@ -18,9 +16,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from gcs.link._errors import LinkError
 from gcs.link._link import Link
-from gcs.transport import FrameDirection
 from gcs.wire import EncoderBatch, distinct_rows
 
 __all__ = ["Fanout"]
@@ -37,16 +33,14 @@ class Fanout:
 
     def __init__(self, links: Sequence[Link]) -> None:
         self._links = tuple(links)
-        self._sends = [link._transport.send for link in self._links]
-        self._listeners = [link._frame_listeners for link in self._links]  # live lists
-        self._stops = [link._stop for link in self._links]
+        self._sends = [link.send_stamped for link in self._links]
         # Taken in one global order, so two fanouts over overlapping links cannot deadlock.
-        locks = {id(link._send_lock): link._send_lock for link in self._links}
+        locks = {id(link.send_lock): link.send_lock for link in self._links}
         self._locks: list[threading.Lock] = [locks[k] for k in sorted(locks)]
         with contextlib.ExitStack() as held:  # the batch takes the encoders' counters
             for lock in self._locks:
                 held.enter_context(lock)
-            self._batch = EncoderBatch([link._encoder for link in self._links])
+            self._batch = EncoderBatch([link.encoder for link in self._links])
         self._batch.load_kernel()  # not at the first send, under every link's lock
 
     def send(self, packed: np.ndarray, crc_extra: int,
@@ -77,23 +71,15 @@ class Fanout:
             data, width, lengths = self._batch.stamp_buffer(
                 packed, crc_extra) if whole else self._batch.stamp_buffer(
                 packed[rows], crc_extra, rows)
-            # locals and one zip: a hundred rounds of this loop are a tenth of the tick
-            sends, stops, listeners = self._sends, self._stops, self._listeners
+            sends = self._sends  # a local: this loop runs once per vehicle and tick
             start = 0
             for i, size in zip(rows, lengths, strict=True):
                 frame = data[start:start + size]
                 start += width
-                if stops[i].is_set():  # numbered, never sent: closed for good
-                    failed[i] = LinkError(self._links[i].sysid, "link is closed")
-                    continue
-                try:
+                try:  # a closed link's frame is numbered, never sent
                     sends[i](frame)
                 except Exception as exc:
                     failed[i] = exc
-                    continue
-                if listeners[i]:
-                    for listener in listeners[i]:
-                        self._links[i]._call(listener, FrameDirection.OUT, frame)
         finally:
             for lock in reversed(self._locks):
                 lock.release()

@@ -316,16 +316,34 @@ class Link:
         """Monotonic time (s) that the ``time_boot_ms`` of the GCS's frames counts from."""
         return self._t0
 
+    @property
+    def encoder(self) -> MavlinkEncoder:
+        """The encoder that numbers (and signs) the GCS's frames to this vehicle; number
+        frames with it only under :attr:`send_lock` (:class:`~gcs.link.Fanout` does)."""
+        return self._encoder
+
+    @property
+    def send_lock(self) -> threading.Lock:
+        """The lock under which a frame is numbered and sent (shared by the links of one
+        :class:`~gcs.link.LinkManager`): the vehicle then sees no gap in the sequence."""
+        return self._send_lock
+
+    def send_stamped(self, frame: bytes) -> None:
+        """Send ``frame``, already numbered by :attr:`encoder`, and hand it to the frame
+        listeners; the caller holds :attr:`send_lock`. LinkError if the link is closed."""
+        if self._stop.is_set():
+            raise LinkError(self._sysid, "link is closed")
+        self._transport.send(frame)
+        for listener in self._frame_listeners:
+            self._call(listener, FrameDirection.OUT, frame)
+
     def _send_frame(self, encode: Callable[..., bytes], *args: object) -> None:
         if self._stop.is_set():
             raise LinkError(self._sysid, "link is closed")
         # The loop, the service thread and commands all send: encoding gives the
         # sequence number, so encode and send as one step or the vehicle sees a loss.
         with self._send_lock:  # listeners too: the recorder keeps frames in sequence order
-            frame = encode(*args)
-            self._transport.send(frame)
-            for listener in self._frame_listeners:
-                self._call(listener, FrameDirection.OUT, frame)
+            self.send_stamped(encode(*args))
 
     def send_setpoint(self, *, accel_xy_ned: tuple[float, float], z_ned: float | None = None,
                       az_ned: float | None = None) -> None:
