@@ -131,7 +131,7 @@ def measure(n: int, seconds: float, folder: Path, *,
             deadline = time.monotonic() + 10
             while len(app.links.missing()) and time.monotonic() < deadline:
                 time.sleep(0.05)
-            app.runtime._set_phase(Phase.FORMATION)  # measure the streaming tick itself
+            app.runtime.phases.set(Phase.FORMATION)  # measure the streaming tick itself
             app.operator.set_sticks(0.5, 0.2, 0.3, now=app.clock.now(), source="bench")
             # The same tick back to back: the code's own cost with warm caches.
             warm = []

@@ -40,8 +40,7 @@ from pymavlink.dialects.v20 import ardupilotmega as v20
 
 from gcs.config import LinkConfig, Team, TeamFrameConfig, load_team
 from gcs.link import Link, LinkManager
-from gcs.loop import Action, FleetState, OperatorCommand, Phase, Runtime, WallClock
-from gcs.loop._runtime import Event
+from gcs.loop import Action, Event, FleetState, OperatorCommand, Phase, Runtime, WallClock
 from gcs.testing import mavlink2_connection
 from gcs.transport import MavutilTransport
 from gcs.wire import CopterMode, Px4AutoSubMode, Px4MainMode, SigningKey, SimMode

@@ -22,11 +22,11 @@ import pytest
 
 from gcs.app import GcsApp, SimProcess, free_tcp_port
 from gcs.app._scenario import Scenario, ScenarioError, Step, play
+from gcs.common import HOLD_KP, HOLD_KV
 from gcs.config import Team, load_team
 from gcs.loop import FleetState, Phase, RuntimeSnapshot
-from gcs.loop._runtime import HOLD_KP, HOLD_KV
 from gcs.transport import ZenohSettings
-from gcs.wire import SimMode
+from gcs.wire import SETPOINT_MESSAGE, SimMode
 from tests.test_safety_flight import break_vehicle, in_formation, sim_sleep
 from tests.test_setpoint_stream import hovering
 
@@ -83,16 +83,17 @@ def test_setpoints_lost_on_the_way_are_told_by_the_vehicle_and_recovered() -> No
     tells the GCS that the stream, not a pilot, took it out of OFFBOARD."""
     with in_formation() as app:
         fly_sticks(app, 1.0, forward=0.6)
-        fanout = app.runtime._fanout
-        send = fanout.send
+        transport = app.runtime.profiles[2].link.transport
+        send = transport.send
         lost = threading.Event()
 
-        def lossy(packed: object, crc_extra: int, only: object = None) -> object:
-            if lost.is_set():
-                only = [0, 2, 3] if only is None else [i for i in only if i != 1]
-            return send(packed, crc_extra, only)
+        def lossy(frame: bytes) -> None:  # a MAVLink 2 frame's message id: bytes 7-9
+            if lost.is_set() and int.from_bytes(bytes(frame[7:10]), "little") == \
+                    SETPOINT_MESSAGE.id:
+                return
+            send(frame)
 
-        fanout.send = lossy  # type: ignore[method-assign]
+        transport.send = lossy  # type: ignore[method-assign]
         lost.set()
         fly_sticks(app, 1.0, forward=0.6)
         lost.clear()

@@ -216,7 +216,7 @@ def test_kept_coefficients_follow_every_change_of_demand(guidance: Guidance) -> 
 
 
 def test_a_non_finite_command_becomes_zero_and_the_largest_norm_is_of_what_is_left() -> None:
-    """What the loop sends and the safety bound it checks (gcs.loop._runtime)."""
+    """What the loop sends and the safety bound it checks (gcs.loop._guidance_stage)."""
     accel = np.array([[3.0, 4.0], [np.nan, 1.0], [np.inf, -np.inf], [0.6, -0.8]])
     assert finite_max_norm(accel) == pytest.approx(5.0)
     assert np.array_equal(accel, [[3.0, 4.0], [0.0, 1.0], [0.0, 0.0], [0.6, -0.8]])

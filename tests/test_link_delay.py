@@ -1,5 +1,5 @@
 """The guidance over a slow link: predicting one round trip further keeps the paper's team in
-shape (gcs.loop._runtime follows the links' round trip; here the closed loop that says why).
+shape (gcs.loop._demand_stage follows the links' round trip; here the closed loop that says why).
 
 Planar double integrators under eq. udi at 4 Hz with a zero-order hold, as in
 tests/double_integrator.py, but the positions are read half a round trip late
@@ -13,7 +13,7 @@ import pytest
 
 from gcs.config import load_team
 from gcs.guidance import Guidance, MotionDemand
-from gcs.loop._runtime import LINK_DELAY_CAP_S
+from gcs.loop import LINK_DELAY_CAP_S
 
 TEAM = load_team("configs/bebop_square.yaml")
 

@@ -12,16 +12,13 @@ from __future__ import annotations
 import numpy as np
 
 from gcs.loop import Phase
-from gcs.loop._safety import SafetyVerdict
 from tests.scripted_autopilot import HOVER_THRUST, fleet_state, peer_team
-
-_CALM = SafetyVerdict(freeze=False, land=False, events=())
 
 
 def test_a_missing_thrust_is_said_once_while_it_lasts_and_again_when_it_comes_back() -> None:
     with peer_team({vid: ("ardupilot", {}) for vid in (1, 2, 3, 4)}) as bench:
         runtime, team = bench.runtime, bench.team
-        high = 10.0 + runtime.taut_altitude(1.0)
+        high = 10.0 + team.taut_altitude(1.0)
         silent = fleet_state(team.formation.positions, HOVER_THRUST, altitude=high)
         assert silent.thrust_age is not None
         silent.thrust_age[2] = np.inf  # vehicle 3's ATTITUDE_TARGET stopped
@@ -33,8 +30,9 @@ def test_a_missing_thrust_is_said_once_while_it_lasts_and_again_when_it_comes_ba
         now = 10.0
         for fleet in (silent,) * 12 + (heard,) * 2 + (silent,) * 12:
             now += 0.25
-            runtime._report_safety(_CALM)  # as each tick does, before its rules
-            runtime._share_load(now, fleet, Phase.FORMATION, 1.0)
+            # as each tick does: the safety rules, then load sharing
+            runtime.stages.safety.judge(now, Phase.FORMATION, fleet, commanded=0.0)
+            runtime.stages.load_share.update(now, fleet, Phase.FORMATION, 1.0)
             if fleet is heard:
                 assert said() == 1
         assert said() == 2

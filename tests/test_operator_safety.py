@@ -62,8 +62,8 @@ def test_altitude_is_rate_limited() -> None:
 
 
 def test_the_pickup_band_is_climbed_and_descended_at_its_slow_rate() -> None:
-    """Lift and set-down (gcs.loop._runtime): the ropes take the weight between 0.8 and
-    1.0 m; the ramp crosses that band at 0.02 m/s and the rest at 0.1 m/s."""
+    """Lift and set-down (gcs.loop._actions, gcs.loop._phase_stage): the ropes take the
+    weight between 0.8 and 1.0 m; the ramp crosses that band at 0.02 m/s and the rest at 0.1 m/s."""
     band = (0.8, 1.0, 0.02)
     assert ramp(0.7, 2.0, 1.0, 0.1, band) == pytest.approx(0.8)  # up to the band's edge
     assert ramp(0.7, 2.0, 2.0, 0.1, band) == pytest.approx(0.82)  # then slowly

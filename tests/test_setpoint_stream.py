@@ -141,7 +141,7 @@ def test_a_vehicle_whose_vertical_channel_fails_is_named_and_the_others_keep_the
         assert sent[2] >= 3 and sent[3] >= 3, sent
         # A non-finite altitude target reaches no vehicle, whatever its vertical channel
         # (2 and 3 are not named again: their warning above stands, one per vehicle).
-        app.runtime._send_all(np.zeros((4, 2)), z_ned=math.nan)
+        app.runtime.stages.setpoints.stream.send(np.zeros((4, 2)), np.full(4, math.nan))
         texts = [e.text for e in app.runtime.events() if "altitude target" in e.text]
         assert texts == ["vehicle 1: setpoint not sent: altitude target not finite: nan",
                          "vehicle 4: setpoint not sent: altitude target not finite: nan"], texts

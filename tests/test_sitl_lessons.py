@@ -25,6 +25,7 @@ def test_the_spins_rope_lead_needs_the_thrusts_to_show_the_ropes_carrying() -> N
     with peer_team({vid: ("ardupilot", {}) for vid in (1, 2, 3, 4)}) as bench:
         runtime, team = bench.runtime, bench.team
         sharing = runtime.load_sharing
+        lead_of = runtime.stages.guidance.rope_lead.apply
         assert sharing is not None and team.config.guidance.rope_lag > 0
         spin = MotionDemand(forward=0.0, right=0.0, rotate=1.0, scale=1.0)
         zero = np.zeros((4, 2))
@@ -32,14 +33,14 @@ def test_the_spins_rope_lead_needs_the_thrusts_to_show_the_ropes_carrying() -> N
         sharing.observe_slack(5.0, slack.thrust, slack.tilt)  # hovering, ropes slack
 
         # copters with no payload: the thrust stays the slack hover's
-        assert np.all(runtime._rope_lead(slack, spin, zero, carrying=True) == 0.0)
+        assert np.all(lead_of(slack, spin, zero, carrying=True) == 0.0)
         assert any("the ropes carry 0.00 of the payload's weight" in e.text
                    and "rope lead" in e.text for e in runtime.events())
 
         # the ropes carrying the payload: each thrust up by its quarter of its weight
         per_vehicle = team.config.payload.mass / 4 / team.config.airframe.mass
         carrying = fleet_state(team.formation.positions, HOVER_THRUST * (1 + per_vehicle))
-        lead = runtime._rope_lead(carrying, spin, zero, carrying=True)
+        lead = lead_of(carrying, spin, zero, carrying=True)
         speed = np.linalg.norm(lead, axis=1)
         assert np.all(speed > 0.05), lead  # along each vehicle's motion about the centroid
         radial = np.einsum("ij,ij->i", lead, team.formation.positions)
@@ -48,7 +49,7 @@ def test_the_spins_rope_lead_needs_the_thrusts_to_show_the_ropes_carrying() -> N
         # thrusts not known: the lead acts, as it did before there were thrusts
         unknown = fleet_state(team.formation.positions, HOVER_THRUST)
         unknown.thrust_age[:] = np.inf
-        assert np.all(np.linalg.norm(runtime._rope_lead(unknown, spin, zero, carrying=True),
+        assert np.all(np.linalg.norm(lead_of(unknown, spin, zero, carrying=True),
                                      axis=1) > 0.05)
 
 
@@ -56,18 +57,18 @@ def test_a_vehicle_out_of_its_mode_falling_below_the_team_is_coming_down() -> No
     with peer_team({vid: ("ardupilot", {}) for vid in (1, 2, 3, 4)}) as bench:
         runtime, team = bench.runtime, bench.team
         level = fleet_state(team.formation.positions, HOVER_THRUST, modes=("GUIDED",) * 4)
-        assert not runtime._coming_down(level).any()
+        assert not runtime.modes.coming_down(level).any()
         loiter = ("GUIDED", "LOITER", "GUIDED", "GUIDED")
         held = fleet_state(team.formation.positions, HOVER_THRUST, modes=loiter)
         held.p_ned[1, 2] += 0.3  # a pilot's LOITER, 0.3 m lower: frozen, not landed
-        assert not runtime._coming_down(held).any()
+        assert not runtime.modes.coming_down(held).any()
         falling = fleet_state(team.formation.positions, HOVER_THRUST, modes=loiter)
         falling.p_ned[1, 2] += 0.8
-        assert runtime._coming_down(falling).tolist() == [False, True, False, False]
+        assert runtime.modes.coming_down(falling).tolist() == [False, True, False, False]
         low_in_guided = fleet_state(team.formation.positions, HOVER_THRUST,
                                     modes=("GUIDED",) * 4)
         low_in_guided.p_ned[1, 2] += 0.8  # on the GCS's setpoints: the GCS's own business
-        assert not runtime._coming_down(low_in_guided).any()
+        assert not runtime.modes.coming_down(low_in_guided).any()
         landing = fleet_state(team.formation.positions, HOVER_THRUST,
                               modes=("GUIDED", "LAND", "GUIDED", "GUIDED"))
-        assert runtime._coming_down(landing).tolist() == [False, True, False, False]
+        assert runtime.modes.coming_down(landing).tolist() == [False, True, False, False]

@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 
 from gcs.link import LinkHealth
-from gcs.loop._runtime import Event
+from gcs.loop import Event
 from web._events import EventLog, bursts, condition, conditions, split_vehicle
 from web._link_quality import LinkQuality, received_share
 from web._replay import ReplayEvent

@@ -15,8 +15,15 @@ from gcs.analysis import analyze
 from gcs.config import LinkConfig, load_team
 from gcs.guidance import MotionDemand
 from gcs.link import LinkHealth
-from gcs.loop import FenceVerdict, FleetState, OperatorSnapshot, Phase, RuntimeSnapshot, TickStats
-from gcs.loop._runtime import Event
+from gcs.loop import (
+    Event,
+    FenceVerdict,
+    FleetState,
+    OperatorSnapshot,
+    Phase,
+    RuntimeSnapshot,
+    TickStats,
+)
 from gcs.loop._safety import SafetyEvent, SafetyReason, SafetyVerdict
 from gcs.wire import SimTruth
 from web import TeamView, palette

@@ -26,7 +26,7 @@ class GuidanceStage:
     def __init__(self, team: Team, guidance: Guidance, rope_lead: RopeLead) -> None:
         self._team = team
         self.guidance = guidance
-        self._rope_lead = rope_lead
+        self.rope_lead = rope_lead
         self.largest = 0.0
         """Norm of the largest acceleration the last tick commanded, m/s^2 (0: none)."""
 
@@ -41,7 +41,7 @@ class GuidanceStage:
         elif fleet.located:
             accel = self.guidance.accelerations(fleet.p_ned[:, :2], fleet.v_ned[:, :2],
                                                 fleet.yaw, demand)
-            accel = self._rope_lead.apply(fleet, demand, accel, carrying=carrying)
+            accel = self.rope_lead.apply(fleet, demand, accel, carrying=carrying)
         else:  # cannot place every vehicle: hold still horizontally
             accel = np.zeros((fleet.n, 2))
             self.largest = 0.0

@@ -6,16 +6,20 @@ loop's phases and snapshots back) sits above the loop.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Protocol
 
 import numpy as np
 
+from gcs.config import Team
 from gcs.guidance import MotionDemand
+from gcs.link import AutopilotProfile
+from gcs.loop._clock import Clock
 from gcs.loop._operator import OperatorSnapshot
 from gcs.loop._phases import Phase
 from gcs.wire import SimTruth
 
-__all__ = ["FlightRecorder", "record_tick"]
+__all__ = ["FlightRecorder", "record_team", "record_tick"]
 
 
 class FlightRecorder(Protocol):
@@ -35,6 +39,17 @@ class FlightRecorder(Protocol):
                   sticks: tuple[float, float, float], scale: float, altitude: float,
                   phase: int) -> None:
         """Record one tick of guidance internals."""
+
+
+def record_team(recorder: FlightRecorder, team: Team, profiles: Mapping[int, AutopilotProfile],
+                clock: Clock) -> None:
+    """Record the team, once, and every frame in and out of its links from here on."""
+    f, lim = team.formation, team.config.limits
+    recorder.team(clock.now(), ids=f.ids, edges=f.edges, distances=f.distances,
+                  accel_norm=lim.accel_norm, accel_axis=lim.accel_axis)
+    for vid in f.ids:
+        profiles[vid].link.add_frame_listener(
+            lambda _direction, frame: recorder.frame(clock.now(), frame))
 
 
 def record_tick(recorder: FlightRecorder, now: float, *, errors: np.ndarray, accel: np.ndarray,

@@ -23,6 +23,7 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -43,7 +44,7 @@ from gcs.loop._phase_machine import PhaseMachine
 from gcs.loop._phase_stage import PhaseStage
 from gcs.loop._phases import Action, Phase
 from gcs.loop._prearm import Prearm
-from gcs.loop._record import FlightRecorder, record_tick
+from gcs.loop._record import FlightRecorder, record_team, record_tick
 from gcs.loop._rope_lead_stage import RopeLead
 from gcs.loop._safety import evaluate
 from gcs.loop._safety_stage import GAP_S, SafetyStage
@@ -54,7 +55,19 @@ from gcs.loop._team_frame import TeamFrame
 from gcs.loop._vehicle_modes import VehicleModes
 from gcs.wire import SimTruth
 
-__all__ = ["Runtime"]
+__all__ = ["Runtime", "Stages"]
+
+
+@dataclass(frozen=True)
+class Stages:
+    """The tick's stages, in the order the tick runs them (gcs/loop/README.md)."""
+
+    safety: SafetyStage
+    phase: PhaseStage
+    demand: DemandStage
+    load_share: LoadShareStage
+    guidance: GuidanceStage
+    setpoints: SetpointStage
 
 
 class Runtime:
@@ -96,69 +109,65 @@ class Runtime:
         ordered = [profiles[vid] for vid in self.ids]
         self.fleet_table = FleetTable(self.ids, profiles)
         """The team's latest telemetry, kept current by the links (the UI reads it too)."""
-        self._warm_up()
-        self._events = EventLog(clock.now, recorder)
-        self._phases = PhaseMachine(self._events)
+        _warm_up(team, self.fleet_table)
+        self.event_log = EventLog(clock.now, recorder)
+        """What the operator is told: every stage's events and warnings."""
+        self.phases = PhaseMachine(self.event_log)
+        """The flight phase (:attr:`phase` reads it)."""
         if recorder is not None:  # before anything sends (the team frame may)
-            self._record_team(recorder)
+            record_team(recorder, team, profiles, clock)
         self.team_frame = TeamFrame(team, profiles, self.fleet_table, note=self.note)
         """Where each vehicle's local frame lies in the team frame the fleet table reads in."""
         self.prearm = Prearm(team, self.analysis, self.team_frame, profiles, note=self.note)
         """The checks an arm must pass."""
-        modes = VehicleModes(ordered)
-        self._modes = modes
-        self._actions = ActionRunner(team, profiles, fleet_table=self.fleet_table, clock=clock,
-                                     operator=operator, gate=self.gate, prearm=self.prearm,
-                                     phases=self._phases, events=self._events, modes=modes)
-        stream = SetpointStream(ordered, clock=clock.now, gap_s=GAP_S, on_unsent=lambda vid, why:
-                                self._events.warn_once(("send", vid), f"vehicle {vid}: "
-                                                       f"setpoint not sent: {why}"))
-        self._safety = SafetyStage(team, self.analysis, profiles, clock=clock, modes=modes,
-                                   stream=stream, actions=self._actions, phases=self._phases,
-                                   events=self._events)
-        self._phase_stage = PhaseStage(team, self.analysis, phases=self._phases,
-                                       actions=self._actions, events=self._events)
-        guidance = Guidance.from_team(team)
-        self._demand = DemandStage(team, guidance, ordered, truth_source=truth_source,
-                                   events=self._events,
-                                   follow_link_delay=not self.gate.enabled and guidance.lead > 0)
-        self._sharing = LoadShareStage(team, self._events)
-        self._guidance = GuidanceStage(team, guidance, RopeLead(
-            team, guidance, self._sharing.sharing, self._events))
-        self._setpoints = SetpointStage(
-            team, stream, clock=clock, operator=operator, fleet_table=self.fleet_table,
-            guidance=self._guidance, events=self._events, phase=lambda: self._phases.phase,
-            handing_over=lambda: self._actions.handing_over, trims=lambda: self._sharing.trims)
+        self.modes = VehicleModes(ordered)
+        """Each vehicle's streaming and landing modes, and the changes seen."""
+        self.actions = ActionRunner(team, profiles, fleet_table=self.fleet_table, clock=clock,
+                                    operator=operator, gate=self.gate, prearm=self.prearm,
+                                    phases=self.phases, events=self.event_log,
+                                    modes=self.modes)
+        """The operator's phase actions, on worker threads."""
+        self.stages = self._stages(ordered)
+        """The tick's stages, in the order it runs them."""
         self._timer = TickTimer()
         self._snapshot: RuntimeSnapshot | None = None
         self._listeners: list[Callable[[RuntimeSnapshot], None]] = []
-        self.recovery, self.deformation = self._safety.recovery, self._safety.deformation
-        self.load_sharing = self._sharing.sharing
+        self.recovery = self.stages.safety.recovery
+        self.deformation = self.stages.safety.deformation
+        self.load_sharing = self.stages.load_share.sharing
         """The load-sharing trims (None: off, or a team with no free split)."""
 
-    def _record_team(self, recorder: FlightRecorder) -> None:
-        """The team, once, and every frame in and out from here on."""
-        f, lim = self.team.formation, self.team.config.limits
-        recorder.team(self.clock.now(), ids=f.ids, edges=f.edges, distances=f.distances,
-                      accel_norm=lim.accel_norm, accel_axis=lim.accel_axis)
-        for vid in self.ids:
-            self.profiles[vid].link.add_frame_listener(
-                lambda _direction, frame: recorder.frame(self.clock.now(), frame))
-
-    def _warm_up(self) -> None:
-        """Load the tick's compiled kernels now, on the arrays the tick passes them:
-        compiling or loading them at the first tick made it late."""
-        fleet = self.fleet_table.read(0.0)
-        _ = fleet.located
-        evaluate(self.team.config.safety, self.ids, fleet.age, fleet.p_ned, safe_radius=1.0)
-        self.team.formation.distance_errors(fleet.p_ned[:, :2])
-        finite_max_norm(np.zeros((fleet.n, 2)))
+    def _stages(self, ordered: list[AutopilotProfile]) -> Stages:
+        team, events = self.team, self.event_log
+        stream = SetpointStream(
+            ordered, clock=self.clock.now, gap_s=GAP_S, on_unsent=lambda vid, why:
+            events.warn_once(("send", vid), f"vehicle {vid}: setpoint not sent: {why}"))
+        guidance = Guidance.from_team(team)
+        load_share = LoadShareStage(team, events)
+        guidance_stage = GuidanceStage(team, guidance, RopeLead(team, guidance,
+                                                                load_share.sharing, events))
+        return Stages(
+            safety=SafetyStage(team, self.analysis, self.profiles, clock=self.clock,
+                               modes=self.modes, stream=stream, actions=self.actions,
+                               phases=self.phases, events=events),
+            phase=PhaseStage(team, self.analysis, phases=self.phases, actions=self.actions,
+                             events=events),
+            demand=DemandStage(team, guidance, ordered, truth_source=self.truth_source,
+                               events=events,
+                               follow_link_delay=not self.gate.enabled and guidance.lead > 0),
+            load_share=load_share, guidance=guidance_stage,
+            setpoints=SetpointStage(
+                team, stream, clock=self.clock, operator=self.operator,
+                fleet_table=self.fleet_table, guidance=guidance_stage, events=events,
+                phase=lambda: self.phases.phase,
+                handing_over=lambda: self.actions.handing_over,
+                trims=lambda: load_share.trims))
 
     # -- what the page, the scenarios and the metrics read ------------------------------
 
     @property
     def phase(self) -> Phase:
-        return self._phases.phase
+        return self.phases.phase
 
     @property
     def snapshot(self) -> RuntimeSnapshot | None:
@@ -167,31 +176,31 @@ class Runtime:
 
     def events(self) -> tuple[Event, ...]:
         """Recent events, oldest first."""
-        return self._events.recent()
+        return self.event_log.recent()
 
     @property
     def errors(self) -> int:
         """Error events so far (the event list keeps only the recent ones)."""
-        return self._events.errors
+        return self.event_log.errors
 
     @property
     def resends(self) -> int:
         """Setpoint rounds re-sent between ticks so far."""
-        return self._setpoints.stream.resends
+        return self.stages.setpoints.stream.resends
 
     @property
     def analysis_override(self) -> bool:
         """Fly although the analysis fails (``--override-analysis``): the user's call."""
-        return self._phase_stage.analysis_override
+        return self.stages.phase.analysis_override
 
     @analysis_override.setter
     def analysis_override(self, value: bool) -> None:
-        self._phase_stage.analysis_override = value
+        self.stages.phase.analysis_override = value
 
     @property
     def action_running(self) -> bool:
         """Whether a phase action (arm, take off, land, resume...) is still running."""
-        return self._actions.running
+        return self.actions.running
 
     def add_listener(self, callback: Callable[[RuntimeSnapshot], None]) -> None:
         """Call ``callback(snapshot)`` after every tick (on the loop thread: keep it short)."""
@@ -199,15 +208,15 @@ class Runtime:
 
     def note(self, level: str, text: str) -> None:
         """Add an event from outside the loop (link presence, UI, gamepad): shown and logged."""
-        self._events.note(level, text)
+        self.event_log.note(level, text)
 
     def request(self, action: Action) -> None:
         """Start a phase action; returns at once. PhaseError if the phase does not allow it."""
-        self._actions.request(action)
+        self.actions.request(action)
 
     def stats(self) -> TickStats:
         """Loop timing over the recent ticks."""
-        return self._timer.stats(setpoint_gap_max=self._setpoints.stream.gap_max)
+        return self._timer.stats(setpoint_gap_max=self.stages.setpoints.stream.gap_max)
 
     # -- the tick ------------------------------------------------------------------------
 
@@ -215,35 +224,36 @@ class Runtime:
         """One guidance tick, its stages in order; never raises for a vehicle's fault."""
         started, started_cpu = time.perf_counter(), time.thread_time()
         now = self.clock.now()
+        st = self.stages
         # The phase before the fleet: a phase entered once every vehicle confirmed its mode
         # then never meets telemetry older than that confirmation.
-        phase = self._phases.phase
+        phase = self.phases.phase
         fleet = self.fleet_table.read(now)
-        verdict = self._safety.judge(now, phase, fleet, commanded=self._guidance.largest)
+        verdict = st.safety.judge(now, phase, fleet, commanded=st.guidance.largest)
         op = self.operator.snapshot(now)
-        phase = self._phases.phase  # an action may have moved it meanwhile
-        self._modes.report(fleet, phase, self._events)
-        phase = self._phase_stage.settle(phase, fleet, verdict)
-        moving, demand = self._demand.motion(phase, verdict, op)
-        self._setpoints.hold_back()
+        phase = self.phases.phase  # an action may have moved it meanwhile
+        self.modes.report(fleet, phase, self.event_log)
+        phase = st.phase.settle(phase, fleet, verdict)
+        moving, demand = st.demand.motion(phase, verdict, op)
+        st.setpoints.hold_back()
         fence = None
-        self._sharing.update(now, fleet, phase, op.demand.scale)
-        if self._setpoints.streams(phase):
-            demand, fence = self._demand.limit(fleet, demand, verdict)
-            accel = self._guidance.accelerations(
-                fleet, demand, hold=self._safety.shape in (Deformation.HOLD, Deformation.LAND),
+        st.load_share.update(now, fleet, phase, op.demand.scale)
+        if st.setpoints.streams(phase):
+            demand, fence = st.demand.limit(fleet, demand, verdict)
+            accel = st.guidance.accelerations(
+                fleet, demand, hold=st.safety.shape in (Deformation.HOLD, Deformation.LAND),
                 hold_points=self.deformation.hold_points, carrying=phase is Phase.FORMATION)
-            self._setpoints.send(now, accel, op)
-            self._phase_stage.advance(phase, op, now, fleet)
+            st.setpoints.send(now, accel, op)
+            st.phase.advance(phase, op, now, fleet)
         else:
-            accel = self._guidance.idle(fleet.n)
-            self._setpoints.stop()
+            accel = st.guidance.idle(fleet.n)
+            st.setpoints.stop()
         errors = self.team.formation.distance_errors(fleet.p_ned[:, :2], demand.scale)
         truth = self.truth_source() if self.truth_source is not None else None
-        phase = self._phases.phase  # after this tick's transitions: record and snapshot agree
+        phase = self.phases.phase  # after this tick's transitions: record and snapshot agree
         if self.recorder is not None:
             record_tick(self.recorder, now, errors=errors, accel=accel, tilt=fleet.tilt,
-                        trims=self._sharing.trims, truth=truth, demand=demand, op=op,
+                        trims=st.load_share.trims, truth=truth, demand=demand, op=op,
                         phase=phase)
         compute = time.perf_counter() - started
         self._timer.computed(compute)
@@ -253,7 +263,7 @@ class Runtime:
                                compute_cpu=time.thread_time() - started_cpu,
                                events=self.events()[-20:], truth=truth, moving=moving,
                                fence=fence, recovery=self.recovery.status(now),
-                               shape=self._safety.shape,
+                               shape=st.safety.shape,
                                prearm=self.prearm.watch(now, fleet, scale=op.demand.scale)
                                if phase is Phase.READY else ())
         self._publish(snap)
@@ -265,16 +275,15 @@ class Runtime:
         next tick)."""
         self._snapshot = snap
         if not self.gate.window():
-            self._events.warn_once(("gate", 0), "lockstep: a phase action was still busy "
-                                                f"{HOLD_CAP_S:g} s after the tick; the sim "
-                                                "went on")
+            self.event_log.warn_once(("gate", 0), "lockstep: a phase action was still busy "
+                                     f"{HOLD_CAP_S:g} s after the tick; the sim went on")
         else:
-            self._events.unlatch(("gate", 0))
+            self.event_log.unlatch(("gate", 0))
         for listener in self._listeners:
             try:
                 listener(snap)
             except Exception as exc:
-                self._events.add("error", f"listener failed: {exc}")
+                self.event_log.add("error", f"listener failed: {exc}")
 
     # -- the schedule --------------------------------------------------------------------
 
@@ -286,7 +295,7 @@ class Runtime:
         ticks at once and restarts its schedule from there (it skips, never
         bursts); the stall is an event, recorded, and counted in :meth:`stats`.
         """
-        end_resends = self._setpoints.resend_until(stop, per_tick=self.setpoints_per_tick,
+        end_resends = self.stages.setpoints.resend_until(stop, per_tick=self.setpoints_per_tick,
                                                    period=self.period)
         try:
             self._tick_forever(stop)
@@ -304,7 +313,7 @@ class Runtime:
             try:
                 self.clock.sleep_until(due)
             except ClockStoppedError as exc:
-                self._events.add("error", f"loop stopped: {exc}")
+                self.event_log.add("error", f"loop stopped: {exc}")
                 return
             now = self.clock.now()
             if k == 0:  # the schedule starts at the clock's first time (a simulator's first
@@ -314,15 +323,25 @@ class Runtime:
             if late > self.period:
                 self.recovery.note_gap(now)
                 self._timer.overruns += 1
-                self._events.add("warning", f"loop stalled: tick {late:.2f} s late")
+                self.event_log.add("warning", f"loop stalled: tick {late:.2f} s late")
                 start, k = now, 0  # tick now, then keep the schedule from here
             try:
                 self.tick()
             except Exception as exc:  # a bug must not stop the team's setpoint stream silently
-                self._events.add("error", f"tick failed: {type(exc).__name__}: {exc}")
+                self.event_log.add("error", f"tick failed: {type(exc).__name__}: {exc}")
             k += 1
 
     def close(self) -> None:
         """Stop the worker threads (does not land: that is the operator's or abort's job)."""
         self.gate.close()
-        self._actions.close()
+        self.actions.close()
+
+
+def _warm_up(team: Team, fleet_table: FleetTable) -> None:
+    """Load the tick's compiled kernels now, on the arrays the tick passes them: compiling
+    or loading them at the first tick made it late."""
+    fleet = fleet_table.read(0.0)
+    _ = fleet.located
+    evaluate(team.config.safety, team.formation.ids, fleet.age, fleet.p_ned, safe_radius=1.0)
+    team.formation.distance_errors(fleet.p_ned[:, :2])
+    finite_max_norm(np.zeros((fleet.n, 2)))
