@@ -74,9 +74,10 @@ CLOCK_NOTE_PERIOD_S = 5.0
 
 ECHO_WAIT = 1.0
 """Longest wall time a lockstep ack waits for a vehicle's setpoint echoes, s. Long, so that
-a loaded or briefly frozen machine (stalls of 0.2 s were seen on the development VM) still
-acks only once the sim has the setpoints; only vehicles heard from since the last ack are
-waited for, so a dead or cut-off vehicle costs nothing (:class:`_EchoCounter`)."""
+a loaded or briefly frozen machine (a VM's hypervisor stalls it in bursts:
+docs/performance.md, "The machine") still acks only once the sim has the setpoints; only
+vehicles heard from since the last ack are waited for, so a dead or cut-off vehicle costs
+nothing (:class:`_EchoCounter`)."""
 
 
 class _EchoCounter:
@@ -138,8 +139,9 @@ LOOP_GIL_SWITCH_S = 1e-4
 """Longest another thread keeps the GIL once the loop wants it, s (Python's default: 5 ms).
 
 Receive threads decode every vehicle's telemetry; with a hundred vehicles the
-default let them hold the loop back: tick jitter p99 10 ms, 3 ms with this
-(bench/gcs_tick.py). The sim host sets the same for its receive threads."""
+default lets them hold the loop back, and its tick jitter with it (figures:
+docs/performance.md, bench/gcs_tick.py). The sim host sets the same for its receive
+threads."""
 
 
 class GcsApp:

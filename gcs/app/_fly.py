@@ -254,9 +254,9 @@ class HeadlessFlight:
     def land_before_exit(self, why: str = "the flight failed") -> str:
         """After a flight that failed on real vehicles (``why``: what ended it): the team,
         if in the air, is aborted (held, then landed, as the ABORT button) and waited for,
-        with the loop running, before the GCS lets go of it. ``gcs fly`` once exited at
-        the failure and left four ArduCopter SITL copters hovering in GUIDED with no one
-        streaming to them. Returns what to add to the flight's error: how it ended."""
+        with the loop running, before the GCS lets go of it: exiting at the failure would
+        leave the copters in the air with no one streaming to them (ArduCopter in GUIDED
+        hovers on). Returns what to add to the flight's error: how it ended."""
         loop = self.app.loop
         was = loop.phase
         if not (self.real and was.airborne):

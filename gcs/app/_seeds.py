@@ -6,9 +6,10 @@ gusts, the same on every run; what a team does in general is the spread over see
 to the analysis (``gcs analyze --verify``). Both fly here: each flight in a worker
 process of its own (a fresh interpreter: no zenoh session or thread inherited), with
 its simulator beside it, ``jobs`` at a time. In lockstep the simulator and the GCS of a
-flight mostly take turns, so a flight keeps one to one and a half cores busy and
-flights in parallel take the others (``bench/monte_carlo.py``). A worker that raises
-or dies gives a flight that did not complete, with the reason: no seed is ever lost.
+flight mostly take turns, so a flight keeps one core busy and part of another and
+flights in parallel take the others (figures: docs/performance.md,
+``bench/monte_carlo.py``). A worker that raises or dies gives a flight that did not
+complete, with the reason: no seed is ever lost.
 """
 
 from __future__ import annotations

@@ -32,7 +32,7 @@ waiting lockstep simulator repeats its clock ten times a second)."""
 
 PACE_WINDOW_S = 1.5
 """Wall time over which a free-running simulator's pace is measured, s: several times a slow
-link's jitter (a sample held back 0.15 s read a 0.5 s window as 1.3x real time)."""
+link's jitter (a sample held back 0.15 s makes a 0.5 s window read 1.3x real time)."""
 
 FREE_PACE_MAX = 1.2
 """Fastest pace of a free-running simulator a GCS follows, sim s per wall s: real time, with

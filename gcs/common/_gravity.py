@@ -1,8 +1,8 @@
 """Standard gravity: the one value the simulator, the airframe checks and the analysis share.
 
-Why one constant: the simulator used 9.81 m/s^2 and the analysis 9.80665, so a
-hover measured in the simulator and the analysis' prediction of it differed by
-0.03 % before any physics did.
+Why one constant: with 9.81 m/s^2 in one and 9.80665 in the other, a hover
+measured in the simulator and the analysis' prediction of it would differ by
+0.03 % before any physics does.
 """
 
 from __future__ import annotations

@@ -29,8 +29,8 @@ def stop_on_signals() -> None:
 
     Why: a shell script that starts ``gcs demo &`` (any command in the background of a
     non-interactive shell) starts it with SIGINT ignored, and Python leaves an ignored
-    SIGINT ignored: the Ctrl-C a supervisor or a test sent did nothing, and the page and
-    its simulator ran on. SIGTERM is treated like Ctrl-C, so a terminated command still
+    SIGINT ignored: a Ctrl-C from a supervisor or a test would do nothing, and the page
+    and its simulator would run on. SIGTERM is treated like Ctrl-C, so a terminated command still
     stops what it started (its simulator, its recording) on its way out. Does nothing
     outside the main thread, where Python cannot set handlers.
     """

@@ -2,9 +2,8 @@
 
 Why: every ``close()`` waits a bounded time for its worker thread, so a stuck
 thread (a driver call that never returns, a socket read the OS does not wake)
-cannot hang the GCS on exit. A thread that outlives the wait used to be left
-running in silence; now it is named in one warning, so whoever reads the log
-knows which part did not stop.
+cannot hang the GCS on exit. A thread that outlives the wait is left running and
+named in one warning, so whoever reads the log knows which part did not stop.
 """
 
 from __future__ import annotations

@@ -1,10 +1,10 @@
 """One compiled pass over a .tlog's bytes: where each checked MAVLink frame is.
 
-Why compiled: an indexer in Python spends about a microsecond of interpreter
-work per byte it inspects and keeps a Python int per field per message (about
-100 bytes a message while it builds); a log of hours holds millions of
-messages. This kernel walks the memory-mapped file once, checks each frame's
-checksum with its type's CRC_EXTRA (so a corrupt stretch never invents
+Why compiled: an indexer in Python spends interpreter work on every byte it
+inspects and keeps a Python int per field per message while it builds; a log of
+hours holds millions of messages (figures: docs/performance.md,
+bench/log_read.py). This kernel walks the memory-mapped file once, checks each
+frame's checksum with its type's CRC_EXTRA (so a corrupt stretch never invents
 systems or messages), and writes the record's fields into preallocated numpy
 columns, a chunk of records at a time.
 
@@ -142,7 +142,7 @@ def release_pages(buf: np.ndarray) -> None:
     """Drop the pages of a :func:`map_file` array read so far from this process's memory.
 
     They stay in the kernel's page cache (a re-read is cheap); without this a
-    scan of a 300 MB log left all 300 MB counted against the process.
+    scan of a 300 MB log would leave all 300 MB counted against the process.
     """
     if _DONTNEED is not None and isinstance(buf.base, mmap.mmap):
         buf.base.madvise(_DONTNEED)

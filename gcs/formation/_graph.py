@@ -146,7 +146,8 @@ class Formation:
         """e_k = ||z_k|| - scale * d_k for actual positions (n, 2) -> (m,).
 
         Compiled (:func:`edge_errors`): the loop computes them every tick, where
-        the five numpy calls this takes otherwise cost 0.1 ms after its pause.
+        the five numpy calls this takes otherwise each pay numpy's cost per call
+        after its pause (figures: docs/performance.md, bench/gcs_tick.py).
         """
         return edge_errors(np.asarray(positions, dtype=float), self.edges, self.distances,
                            float(scale))

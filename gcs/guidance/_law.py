@@ -194,8 +194,8 @@ class Guidance:
         self._mask = np.ascontiguousarray(formation.slot_mask, dtype=bool)
         self._coefficients: tuple[MotionDemand, tuple[np.ndarray, np.ndarray, np.ndarray]] \
             | None = None
-        # Load the compiled kernels now: the first call takes a few hundred ms, which
-        # the loop's first tick must not (it would come that late to every vehicle).
+        # Load the compiled kernels now: the first call loads (or compiles) them, which
+        # the loop's first tick must not wait for (it would come late to every vehicle).
         n = formation.n
         self.accelerations(formation.positions, np.zeros((n, 2)), np.zeros(n), MotionDemand())
 
@@ -227,7 +227,8 @@ class Guidance:
         """Slot coefficients ``alpha_v``, ``alpha_a`` and desired distances ``d`` (n, S).
 
         They depend on the demand only, which the operator holds for many ticks:
-        the latest are kept (half the guidance's cost for a hundred vehicles).
+        the latest are kept (computing them is much of the guidance's cost for a
+        hundred vehicles: docs/performance.md).
         """
         cached = self._coefficients
         if cached is not None and cached[0] == demand:
@@ -245,8 +246,7 @@ class Guidance:
 
         :func:`formation_acceleration` on arrays already in the kernel's layout
         (cached coefficients; ``meas`` as :func:`relative_measurements` gives it:
-        float64, C order): the tick skips ten layout checks of a few
-        microseconds each.
+        float64, C order): the tick skips ten layout checks.
         """
         alpha_v, alpha_a, d = self.coefficients(demand)
         return udi(meas.v_own, meas.rel_p, meas.rel_v, self._mask, d, alpha_v, alpha_a,

@@ -6,9 +6,9 @@ Why: each carrying vehicle's autopilot cancels the rope's horizontal pull
 lag ``tau`` (filters, attitude loop, rotors). While the team spins at
 ``omega`` about the down axis, ``F`` turns with it, ``dF/dt = omega z x F``,
 and the autopilot is left ``tau dF/dt / m`` short, against the turn. At the
-paper's 0.4 rad/s on the square that is about 0.13 m/s^2 per vehicle: the
-team turned at a third of the commanded rate while the guidance's centripetal
-feed-forward, sized for the commanded rate, pulled the shape in (0.17 m).
+paper's 0.4 rad/s on the square that is about 0.13 m/s^2 per vehicle: without
+the lead the team turns at a third of the commanded rate while the guidance's
+centripetal feed-forward, sized for the commanded rate, pulls the shape in (0.17 m).
 The autopilot's estimate of the pull is ``F(t - tau)``, so the vehicle gets
 ``(F(t) - F(t - tau)) / m = tau dF/dt / m`` more than commanded; commanding
 ``-tau omega z x F / m`` more cancels it.
@@ -17,8 +17,8 @@ The same lag acts while the ropes take the payload's weight in the pickup (or gi
 it up in the set-down): each rope's pull grows as ``f F`` with ``f`` the share of the
 weight the ropes carry, and the vehicle is left ``tau df/dt F / m`` short, inward.
 On the pentagon in ``tests/data`` that drag, uneven (the vehicles the shape holds
-least went furthest), let one rope take 0.34 of the payload at lift-off against a
-design 0.25; led by ``-tau df/dt F / m`` (:func:`rope_growth_lead`) the ropes took it
+least go furthest), lets one rope take 0.34 of the payload at lift-off against a
+design 0.25; led by ``-tau df/dt F / m`` (:func:`rope_growth_lead`) the ropes take it
 within 0.18-0.23 each.
 """
 

@@ -1,9 +1,10 @@
 """The guidance's per-vehicle arithmetic, compiled: eq. udi and its local frames as loops.
 
 Why: the law is a few dozen multiply-adds per edge, but written as numpy
-array expressions it took about forty calls of several microseconds each; for
-a hundred vehicles that was a third of the 4 Hz loop's one-millisecond budget.
-The same arithmetic in numba loops costs a few microseconds. The maths is
+array expressions it takes about forty calls, each paying numpy's cost per
+call; for a hundred vehicles that is a large share of the 4 Hz loop's
+one-millisecond budget, and the same arithmetic in numba loops a small one
+(figures: docs/performance.md, bench/gcs_tick.py). The maths is
 documented in :mod:`gcs.guidance._law`, which wraps these kernels; they take and
 return plain numpy arrays (float64, C order) and never see anything but what
 each vehicle senses in its own frame.
@@ -119,7 +120,7 @@ def finite_max_norm(accel: np.ndarray) -> float:
     """Zero the non-finite entries of ``accel`` (n, 2) in place; the largest row norm left.
 
     Why one kernel: the loop must never send a NaN, and the safety bound wants
-    the largest command; as numpy calls that was four calls per tick.
+    the largest command; as numpy calls that is four calls per tick.
     """
     largest = 0.0
     for i in range(accel.shape[0]):

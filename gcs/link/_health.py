@@ -67,8 +67,8 @@ class SequenceTracker:
     A frame that arrives late (a UDP radio or a sender's threads reorder them) was counted
     lost when the frames after it arrived: it is counted back, and the stream goes on from
     the newest. A step back to a number never missed (a duplicate, a sender that started
-    again) counts nothing. Without this, one reordered pair read as 255 frames lost (the
-    step back taken as a wrap of the 8-bit number).
+    again) counts nothing. Without this, one reordered pair would read as 255 frames lost
+    (the step back taken as a wrap of the 8-bit number).
     """
 
     def __init__(self) -> None:

@@ -14,7 +14,7 @@ the profile asks for LOCAL_POSITION_NED and ATTITUDE at 20 Hz
 default stream rates on most ports.
 
 Arm: MAV_CMD_DO_SET_MODE GUIDED (4) first, then arm: ArduCopter armed in
-another mode (STABILIZE) and switched to GUIDED later flew its first seconds on
+another mode (STABILIZE) and switched to GUIDED later flies its first seconds on
 its pilot's sticks. Take-off: GUIDED and armed (either done only if needed),
 then MAV_CMD_NAV_TAKEOFF (param7 = altitude above home, m) at once: an armed
 copter left on the ground disarms itself (``DISARM_DELAY``). Land:
@@ -165,7 +165,7 @@ class ArduPilotProfile(ProfileBase):
         target it was computed for (under the send lock: quick, and never sends). Taken
         together, so a position arriving between the caller's target and its setpoint is
         never answered with the new target and the old acceleration (under load the
-        first per-position setpoint carried (0, 0))."""
+        first per-position setpoint would carry (0, 0))."""
         if direction is not FrameDirection.OUT or len(frame) < 12 or frame[0] != 0xFD:
             return
         if int.from_bytes(frame[7:10], "little") != SETPOINT_MESSAGE.id:

@@ -50,7 +50,7 @@ def hold_accel(p_xy: tuple[float, float], v_xy: tuple[float, float],
     """The horizontal acceleration that holds a vehicle at ``hold_xy`` (NED, m) from its
     position and velocity, at most :data:`HOLD_ACCEL_MAX`. Zero acceleration (the stream's
     first) is no hold: it keeps whatever velocity the vehicle has, and four PX4 SIH quads
-    drifted up to 2.8 m apart in a 15 s climb."""
+    drift up to 2.8 m apart in a 15 s climb."""
     ax = -HOLD_KV * v_xy[0] - HOLD_KP * (p_xy[0] - hold_xy[0])
     ay = -HOLD_KV * v_xy[1] - HOLD_KP * (p_xy[1] - hold_xy[1])
     norm = math.hypot(ax, ay)
@@ -174,8 +174,8 @@ class Px4Profile(ProfileBase):
 
     def keep_climbing(self) -> None:
         """The take-off's stream goes on for another ``handover_s``: a climb slower than
-        that (four PX4 SIH quads took 6 s to 0.9 m) lost its stream and went to RTL on
-        PX4's offboard-loss failsafe before the GCS loop took over."""
+        that (four PX4 SIH quads take 6 s to 0.9 m) would lose its stream and go to RTL
+        on PX4's offboard-loss failsafe before the GCS loop takes over."""
         self._hand_over()
 
     def vertical_setpoint(self, z_ned: float) -> float:

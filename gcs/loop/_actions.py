@@ -192,8 +192,8 @@ class ActionRunner:
                 time.sleep(0.02)
         self._operator.reset_altitude(h0, now=self._clock.now())
         # The loop streams from here on: a vehicle confirmed in offboard must not wait
-        # for the slowest one's confirmation without setpoints (its 0.5 s timeout
-        # sent it to hold on a loaded machine).
+        # for the slowest one's confirmation without setpoints (on a loaded machine its
+        # 0.5 s timeout would send it to hold).
         self.handing_over = True
         try:
             self.for_all("offboard", lambda p: p.start_offboard(z_ned=-h0))

@@ -78,7 +78,7 @@ class DemandStage:
         over a radio the positions are a downlink old and the setpoints act an uplink
         late, so the prediction goes one round trip further (median of the last ten
         seconds of the slowest link's TIMESYNC): at 4 Hz with the paper's gains, a
-        delayed link otherwise made the shape's stiffest mode oscillate."""
+        delayed link otherwise makes the shape's stiffest mode oscillate."""
         rtts = [r for r in (link.rtt_s for link in self._links) if r is not None]
         if rtts:
             self._rtts.append(max(rtts))

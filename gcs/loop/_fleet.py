@@ -74,9 +74,10 @@ class FleetTable:
     """Every vehicle's latest telemetry in one array, kept current by the links.
 
     Why: the loop reads the whole team each tick, the UI 25 times a second.
-    Taking a snapshot of each link costs about 10 us per vehicle; here each
-    new record is written into its vehicle's row as it arrives (on the
-    receive thread), and a read is one copy of the array for any team size.
+    Taking a snapshot of each link costs a Python call per vehicle (figures:
+    docs/performance.md); here each new record is written into its vehicle's
+    row as it arrives (on the receive thread), and a read is one copy of the
+    array for any team size.
 
     Args:
         ids: system ids in formation order.
@@ -164,7 +165,8 @@ def _all_finite(p_ned: np.ndarray, v_ned: np.ndarray) -> bool:
 def _derived(rows: np.ndarray, now: float) -> tuple[np.ndarray, np.ndarray, np.ndarray,
                                                     np.ndarray, np.ndarray]:
     """Yaw (0 before any attitude), tilt, ages (>= 0; inf: never heard) and armed flags of
-    the table's rows, in one compiled pass (as numpy calls: 0.2 ms of the 4 Hz tick)."""
+    the table's rows, in one compiled pass (as numpy calls, a sizeable part of the 4 Hz
+    tick: docs/performance.md)."""
     n = rows.shape[0]
     yaw, tilt = np.empty(n), np.empty(n)
     age, heartbeat_age = np.empty(n), np.empty(n)

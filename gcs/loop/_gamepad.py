@@ -21,8 +21,8 @@ The mapping from SDL axis and button numbers is a YAML file
   included) is reported once per distinct fault (``on_fault``, e.g. the page's
   events, and the log) and the thread reads on. A pad whose axes cannot be
   read has its sticks centred but is kept, buttons and all: its axes are
-  tried again every :data:`AXES_RETRY_S` (dropping the pad instead threw away
-  every button press, the abort's included, while it was being reopened).
+  tried again every :data:`AXES_RETRY_S` (dropping the pad instead would throw
+  away every button press, the abort's included, while it is being reopened).
   One bad event must not leave the pilot without the abort button for the
   rest of the flight.
 """

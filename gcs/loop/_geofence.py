@@ -2,8 +2,8 @@
 
 The fence is a horizontal box of half-size ``safety.geofence_xy`` about the
 team origin and a ceiling at ``safety.geofence_altitude``. Freezing every stick
-at the fence (the old rule) left a team that reached it no way back, and the
-team reached it within seconds of any free flight: with the paper's velocity
+at the fence would leave a team that reaches it no way back, and a team
+reaches it within seconds of any free flight: with the paper's velocity
 gain ``c1`` the team follows a speed demand with a time constant of ``1/c1``
 (about 6 s), so it coasts for metres after the sticks centre.
 

@@ -3,8 +3,8 @@
 Why: four or more taut ropes hold a point payload with more ropes than its balance
 needs, and the split between them is decided by the ropes' stretch: on the paper's
 square a diagonal pair 0.2 mm higher than the other carries twice its load (in the
-simulator, whose autopilots hold their altitude to a fraction of a millimetre, the
-pairs flew at 0.33 and 0.17 of the payload for tens of seconds; real vehicles' heights
+simulator, whose autopilots hold their altitude to a fraction of a millimetre, untrimmed
+pairs fly at 0.33 and 0.17 of the payload for tens of seconds; real vehicles' heights
 differ by centimetres, enough to leave a diagonal slack). The analysis certifies each
 vehicle for its design share only if something keeps the split there.
 
@@ -23,13 +23,13 @@ of each vehicle's altitude setpoint in proportion to its excess share
 ``flight.load_share_trim_max``: a vehicle carrying more than its share is lowered. The
 trims act from the bottom of the pickup band, so the rope that goes taut first (the
 vehicle the shape holds furthest out) is let down before it takes the payload alone: on
-a pentagon acting only once the payload hung left one rope at 0.40 of the payload at
-lift-off against a design 0.25. (An integral trim oscillated: the split answers a trim
+a pentagon, trims acting only once the payload hangs leave one rope at 0.40 of the payload
+at lift-off against a design 0.25. (An integral trim oscillates: the split answers a trim
 only as the guidance moves the shape, over tens of seconds.)
 
 The same thrusts say how fast the ropes take the payload (:attr:`LoadSharing.carried_rate`):
 the pickup's rope lead (gcs/guidance/_rope_lead.py) leads each vehicle's growing pull by
-it, the drag that left the pentagon's stiffest vehicle taut first.
+it, the drag that leaves the pentagon's stiffest vehicle taut first.
 """
 
 from __future__ import annotations

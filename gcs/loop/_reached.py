@@ -1,10 +1,10 @@
 """An altitude reached: each vehicle counted once it has been within tolerance of it.
 
 The take-off, the lift and the set-down end when the team is at their altitude. Asking
-for every altitude within the tolerance at one moment never ends on GPS altitudes: four
-PX4 SIH vehicles, each wandering +-0.15 m about its take-off altitude, were never all
-within 0.1 m at once and the take-off timed out. Each vehicle is counted from the first
-moment it is there; a new target starts the count again.
+for every altitude within the tolerance at one moment need never end on GPS altitudes:
+four PX4 SIH vehicles, each wandering +-0.15 m about its take-off altitude, need never be
+all within 0.1 m at once, and the take-off would time out. Each vehicle is counted from the
+first moment it is there; a new target starts the count again.
 """
 
 from __future__ import annotations

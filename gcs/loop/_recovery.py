@@ -3,8 +3,8 @@
 A vehicle whose setpoints stop for its timeout (0.5 s on PX4 and on our
 simulated autopilot) leaves offboard for a hold of its own. On a busy laptop
 or a radio that loses a second, that happens to a healthy team in the middle
-of a flight; freezing the motion until someone notices ended flights that had
-nothing wrong left. So once every link has been fresh for
+of a flight; freezing the motion until someone notices would end flights that
+have nothing wrong left. So once every link has been fresh for
 ``safety.recover_after`` seconds, nothing holds the team (no deformation
 beyond the safe bound, no vehicle coming down), the vehicles out of their
 streaming mode are switched back (the same RESUME an operator presses), and

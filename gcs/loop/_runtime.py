@@ -301,7 +301,7 @@ class Runtime:
             self._tick_forever(stop)
         finally:
             # No more ticks: release whoever waits for one (a scenario parked at the gate
-            # when the sim clock stopped waited for ever), so that they see why.
+            # when the sim clock stops would wait for ever), so that they see why.
             self.gate.close()
             end_resends()
 
@@ -339,7 +339,7 @@ class Runtime:
 
 def _warm_up(team: Team, fleet_table: FleetTable) -> None:
     """Load the tick's compiled kernels now, on the arrays the tick passes them: compiling
-    or loading them at the first tick made it late."""
+    or loading them at the first tick would make it late."""
     fleet = fleet_table.read(0.0)
     _ = fleet.located
     evaluate(team.config.safety, team.formation.ids, fleet.age, fleet.p_ned, safe_radius=1.0)

@@ -70,9 +70,10 @@ class StepGate:
         counted at once, so the window cannot close before it starts: it runs in
         that window. Submitted between windows (by the loop's own tick: a recovery's
         resume, the landing after an abort's hold), it is parked until the next
-        window opens, as a participant that paused: started at once, it raced the
-        rest of the tick (a resume's hold setpoint went before or after the tick's
-        setpoints, whichever thread was first), so two runs of one seed differed.
+        window opens, as a participant that paused: started at once, it would race
+        the rest of the tick (a resume's hold setpoint going before or after the
+        tick's setpoints, whichever thread is first), and two runs of one seed would
+        differ.
         """
         if not self.enabled:
             return executor.submit(fn, *args)

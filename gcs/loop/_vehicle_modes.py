@@ -41,7 +41,7 @@ class VehicleModes:
         """(n,) True where a vehicle is disarmed, in one of its profile's landing modes, or
         out of its streaming mode and more than :data:`COMING_DOWN_DROP_M` below the
         team's median altitude. The last: a mode whose descent is the pilot's (ArduCopter
-        SITL switched to LOITER with no transmitter's throttle fell to the ground), which
+        SITL switched to LOITER with no transmitter's throttle falls to the ground), which
         the team holding above it would otherwise learn of only when it disarmed."""
         down = ~fleet.armed | np.array([m in landing for m, landing in zip(
             fleet.modes, self._landing, strict=True)], dtype=bool)

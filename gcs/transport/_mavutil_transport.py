@@ -5,10 +5,10 @@ real autopilot's bytes go through the same decoder, signing and counters as
 the simulated vehicles'. A background thread waits on the port (``select``)
 and hands whole reads to the link, so the GCS loop never blocks on I/O.
 
-TCP is read and written here on mavutil's socket, not through mavutil: a peer
-that is gone (end of stream, reset) made mavutil print "EOF on TCP socket" at
-every wake-up of the reader, a tight loop (118 MB of log in 40 s when an
-autopilot died at boot). Here a lost peer is said once (a log warning); a
+TCP is read and written here on mavutil's socket, not through mavutil: for a
+peer that is gone (end of stream, reset, an autopilot that died at boot)
+mavutil prints "EOF on TCP socket" at every wake-up of the reader, a tight loop
+that floods the log. Here a lost peer is said once (a log warning); a
 ``tcp:`` link then reconnects with exponential back-off (``BACKOFF_FIRST_S``
 doubling up to ``BACKOFF_CAP_S``), a ``tcpin:`` link waits for the peer to
 connect again, and the first bytes after that are said once too.

@@ -5,16 +5,17 @@ Each vehicle has two keys (see :mod:`gcs.wire.keys`): the GCS publishes on
 the reverse. One zenoh payload carries whole encoded frames.
 
 Publications are not ``express``: zenoh then coalesces whatever is queued
-while the link is busy into one write instead of one write per frame. Measured
-on loopback (bench/link_latency.py, bench/gcs_tick.py): 100 setpoints of one
-tick take 0.4 ms to publish instead of 20-40 ms, and the setpoint round trip
-falls from 2.6-3.3 ms to 0.6-0.8 ms (p50), because the sim's telemetry no
-longer blocks its loop; an idle link still sends a lone frame at once.
+while the link is busy into one write instead of one write per frame, so a
+tick's setpoints publish many times faster and the sim's telemetry does not
+block its loop, which shortens the setpoint round trip (figures:
+docs/performance.md, bench/link_latency.py, bench/gcs_tick.py); an idle link
+still sends a lone frame at once.
 
 Anyone on the fabric can publish on a vehicle's keys: a payload longer than
 :data:`MAVLINK_PAYLOAD_MAX` is dropped before it is copied out of zenoh, and
-counted (``oversize``). 10 MB of MAVLink start bytes, each a candidate frame,
-kept a decoder busy for 1.6 s and slowed the sim tenfold while they came.
+counted (``oversize``): 10 MB of MAVLink start bytes, each a candidate frame,
+keep a decoder busy and slow the sim while they come (figures:
+docs/performance.md).
 """
 
 from __future__ import annotations
@@ -146,7 +147,7 @@ class ZenohTransport:
         self._lock = threading.Lock()
         # Held around every put and while the publisher is taken away: zenoh-python's
         # undeclare raises "Already borrowed" while another thread is inside put (a sim
-        # vehicle killed while its receive thread echoes a frame crashed the sim).
+        # vehicle killed while its receive thread echoes a frame would crash the sim).
         self._send_lock = threading.Lock()
         self.callback_errors = 0
         """Exceptions raised by the receive callback (logged, then counted)."""

@@ -165,10 +165,10 @@ _ADOPTED = frozenset({ClockVerdict.FIRST, ClockVerdict.FORWARD, ClockVerdict.REP
 class ClockGuard:
     """Which sim clock samples a follower adopts: forwards, and in bounded steps.
 
-    Why: the clock key is open to anyone on the fabric. Forged samples threw a
-    GCS's clock 31 years ahead (every vehicle "no fresh telemetry for
-    999999970 s", the flight aborted, the log stamped in 2056); a follower's
-    clock never runs backwards, so one bad sample was for good.
+    Why: the clock key is open to anyone on the fabric, and a follower's clock
+    never runs backwards, so one forged sample far ahead would be for good: a
+    GCS's clock thrown years ahead reads every vehicle as "no fresh telemetry
+    for 999999970 s", aborts the flight and stamps the log decades on.
 
     Rules: the first sample is adopted whatever its time (a GCS joins a running
     sim late). Later samples are adopted if they repeat the last time (a

@@ -286,8 +286,8 @@ class EncoderBatch:
         return self._encoders[i]
 
     def load_kernel(self) -> None:
-        """Compile or load the stamping kernel now (up to a second the first time), so the
-        first :meth:`stamp` does not wait for it."""
+        """Compile or load the stamping kernel now (slow the first time), so the first
+        :meth:`stamp` does not wait for it."""
         packed = np.zeros((1, _HEADER_SIZE + 1), np.uint8)
         one = np.zeros(1, np.uint8)
         stamp_frames(packed, np.zeros(1, np.int64), np.zeros((1, 2), np.int64), one, one,

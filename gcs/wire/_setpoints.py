@@ -161,8 +161,9 @@ class SetpointPacker:
     The constant fields (targets, type masks, frame) are packed once here; each
     :meth:`pack` writes the time stamps and the acceleration and vertical
     channels into a copy. Why: :func:`packed_setpoints` takes about fifteen
-    numpy calls, and after the loop's pause between ticks each costs tens of
-    microseconds. Rows as :func:`packed_setpoints` gives them.
+    numpy calls, and after the loop's pause between ticks each pays again for
+    the caches that were evicted meanwhile (figures: docs/performance.md,
+    bench/gcs_tick.py). Rows as :func:`packed_setpoints` gives them.
     """
 
     def __init__(self, *, target_system: np.ndarray, target_component: np.ndarray,

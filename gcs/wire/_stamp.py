@@ -2,8 +2,9 @@
 
 Why: the loop sends one setpoint to every vehicle per tick and re-sends it
 between ticks. Finishing a hundred frames one by one in Python (header bytes,
-checksum, slicing) cost about 13 us per vehicle in the loop, more than the
-zenoh publication itself; here it is a few microseconds for the whole fleet.
+checksum, slicing) costs the loop more than the zenoh publication itself; one
+compiled pass for the whole fleet costs a small part of that (figures:
+docs/performance.md, bench/gcs_tick.py).
 The CRC is MAVLink's CRC-16/MCRF4XX (X.25), as :func:`gcs.wire._crc.frame_crc`.
 """
 
