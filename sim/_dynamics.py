@@ -9,9 +9,9 @@ exact quaternion rotation), which does not pump energy into oscillations.
 The payload is a point mass pulled by the ropes, slowed by linear drag and held
 by the ground. Every body uses the others' state from the start of the step.
 
-One function does the whole step: numba charges a few hundred nanoseconds per
-call for passing the state NamedTuples, so the per-step work is not split
-into per-vehicle calls.
+One function does the whole step: numba charges for passing the state
+NamedTuples on every call (figures: docs/performance.md, "Why it is fast"), so
+the per-step work is not split into per-vehicle calls.
 """
 
 from __future__ import annotations

@@ -138,9 +138,9 @@ class HostFabric:
             # own, so a backlog of telemetry (which blocks) cannot crowd it out; on a
             # full queue it drops, as the next sample supersedes it anyway. Neither it
             # nor the truth is express (as the frames, gcs.transport._zenoh_transport):
-            # a lone sample still leaves at once, and one write a sample, 128 clock
-            # samples a sim second, was a tenth of a lockstep flight's CPU (7.9 -> 7.1
-            # CPU-s for the short flight, the same flight to the last digit).
+            # a lone sample still leaves at once, and a write for each of 128 clock
+            # samples a sim second would cost a lockstep flight a noticeable share of its
+            # CPU (figures: docs/performance.md, "The sim's clock coalesced").
             self._clock = self._session.declare_publisher(
                 keys.clock(fleet), congestion_control=zenoh.CongestionControl.DROP,
                 priority=zenoh.Priority.REAL_TIME, express=False)

@@ -1,11 +1,12 @@
 """``python -m sim._forkserver FD``: start simulators by forking a process that is warm.
 
-Why: a cold ``python -m sim`` spends about a second of CPU and two of wall time
-before it is ready (numba's import and its first load of the cached kernels);
-a process that starts many (a test suite, Monte-Carlo seeds) paid that each
-time. This server does it once, then forks a child per simulator, ready in
-tens of milliseconds. It opens no zenoh session and starts no thread of its own
-before it forks: each child opens its own, as a cold simulator would.
+Why: a cold ``python -m sim`` takes a while before it is ready (numba's import
+and its first load of the cached kernels), and a process that starts many (a
+test suite, Monte-Carlo seeds) would pay that each time. This server does it
+once, then forks a child per simulator, ready almost at once (figures:
+docs/performance.md, "Many flights at once"). It opens no zenoh session and
+starts no thread of its own before it forks: each child opens its own, as a
+cold simulator would.
 
 Protocol, over the socket inherited as FD (``gcs.app._simfork`` is the client):
 each request is one message carrying a JSON object ``{"argv": [...], "cwd":

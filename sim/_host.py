@@ -340,10 +340,10 @@ class SimHost:
         """Act on the control messages that came since the last chunk, at its boundary.
 
         Why not as they arrive: a control message and a tick's setpoints travel on
-        different keys, so a cut acted on at once was now ahead of the cut vehicle's
-        setpoint of that tick (dropped, that vehicle flew the tick before's), now
-        behind it, as the threads happened to run, and two lockstep runs of one seed
-        differed from there. At the chunk boundary every frame the GCS sent before
+        different keys, so a cut acted on at once would fall now ahead of the cut
+        vehicle's setpoint of that tick (dropped: that vehicle flies the tick before's),
+        now behind it, as the threads happen to run, and two lockstep runs of one seed
+        would differ from there. At the chunk boundary every frame the GCS sent before
         its ack is in (it acks once the sim echoed the tick's setpoints).
         """
         controls, self._controls = self._controls, []

@@ -2,10 +2,10 @@
 
 Why a process: a watchdog thread needs the GIL, which the stepping thread may
 hold while the kernel starves it in the background, so on a machine
-oversubscribed by other processes the thread meant to rescue it waited for it
-(0.06 s simulated in 3 s beside four CPU hogs on two cores). This process has
-an interpreter of its own and imports nothing but the standard library (it
-starts in a few tens of milliseconds): ``python sim/_lifter.py SHARED TID``.
+oversubscribed by other processes the thread meant to rescue it would wait for
+it, and the sim would all but stop (figures: docs/performance.md). This process
+has an interpreter of its own and imports nothing but the standard library (so
+it starts quickly): ``python sim/_lifter.py SHARED TID``.
 
 It shares a few numbers with the stepping process through a small file
 mapped into both (:data:`LAYOUT`): when the chunk the stepping thread steps

@@ -3,11 +3,12 @@
 Why: the sim often shares its machine with the GCS (``gcs demo``, a bench).
 Every few milliseconds it steps physics and encodes telemetry for a fraction
 of a millisecond; at normal priority a GCS loop or MAVLink receive thread that
-wakes meanwhile may wait for that burst, which on a two-core machine tripled
-the p99 of a zenoh round trip between two other processes (0.4 ms to 1.3 ms).
-At Linux's ``SCHED_IDLE`` the kernel counts the sim's core as idle: a waking
-normal thread is placed there and preempts it at once (a shorter time slice
-or nice 19 did not help; renice was tried).
+wakes meanwhile may wait for that burst, which on a two-core machine lengthens
+the tail of a zenoh round trip between two other processes several times
+(figures: docs/performance.md, bench/link_latency.py). At Linux's
+``SCHED_IDLE`` the kernel counts the sim's core as idle: a waking normal thread
+is placed there and preempts it at once (a shorter time slice or nice 19 does
+not help).
 
 The price is that a saturated machine gives the thread almost nothing, and a
 starved sim would freeze the team's telemetry. So a watchdog at normal
@@ -17,11 +18,11 @@ back to the background once it is ahead again and a second has passed
 (:meth:`BackgroundStepping.keeping_up`), since on a machine that stays
 saturated going back at once would starve it again at every chunk. The
 watchdog is a small process of its own (:mod:`sim._lifter`): a thread would
-need the GIL, which the starved loop may hold, and kept a paced host at
-55-70 % of real time with every core saturated, 38-79 % with twice as many
-hogs as cores. The process keeps it at the pace the same host keeps at
-normal priority (1.00 beside four hogs on two cores). It is still an option
-(``python -m sim --background``), not the default: it costs a process.
+need the GIL, which the starved loop may hold, and cannot keep a paced host
+at real time on a saturated machine; the process keeps it at the pace the same
+host keeps at normal priority (figures: docs/performance.md,
+tests/test_sim_priority.py). It is an option (``python -m sim --background``),
+not the default: it costs a process.
 
 Lifting needs the right to raise a thread's priority (root, CAP_SYS_NICE, or
 an RLIMIT_NICE of 20); without it the thread could not come back, so it stays

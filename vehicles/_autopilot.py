@@ -290,9 +290,10 @@ def _finite_vector(value: np.ndarray | tuple[float, ...], size: int, name: str) 
 def _load_mode_entries() -> None:
     """Compile or load the mode entries the commands call, now, on a scratch vehicle.
 
-    Called from Python, each is compiled at its first use: at the first arm, take-off,
-    offboard and landing, the simulator stood still 0.35-0.6 s each (cold cache), every
-    vehicle's telemetry went stale at each phase change and the GCS warned four times.
+    Called from Python, each would be compiled at its first use: at the first arm,
+    take-off, offboard and landing the simulator would stand still (cold cache: figures
+    in docs/performance.md) and every vehicle's telemetry would go stale at each phase
+    change.
     """
     scratch = make_autopilot_state(1)
     enter_armed_hold(scratch, 0)

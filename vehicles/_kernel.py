@@ -17,9 +17,9 @@ its rotors instead of flying; below the ground clearance TAKEOFF and OFFBOARD
 keep the attitude level so INDI cannot tilt a vehicle that friction holds.
 
 Stages take the state NamedTuples and loop inside; the per-vehicle helpers take
-plain floats. (Handing NamedTuples of arrays to per-vehicle helpers costs
-hundreds of nanoseconds per call in numba; this layout keeps a step of 64
-vehicles in the tens of microseconds.)
+plain floats. (Handing NamedTuples of arrays to per-vehicle helpers has a cost
+per call in numba; this layout keeps a step of many vehicles cheap: figures in
+docs/performance.md, "Why it is fast".)
 """
 
 from __future__ import annotations

@@ -10,7 +10,7 @@ team is away from the origin, one who orbited, one whose camera fell behind.
 * **Follow**: the point looked at moves with the team, absolutely, not by
   adding the team's motion to the camera the browser last reported: a report
   still on its way from before the last move would otherwise undo that move,
-  and the camera fell further behind with every one. The viewer's own choices
+  and the camera would fall further behind with every one. The viewer's own choices
   are kept: orbit and zoom (the camera's offset from the point it looks at),
   and a pan (where the viewer moved that point, relative to the team). A
   reported point that is none of those this view set lately is the viewer's
@@ -19,8 +19,8 @@ team is away from the origin, one who orbited, one whose camera fell behind.
   One is not: the page's own first view (viser's initial camera, looking at
   the origin). The browser puts it back by itself while the page
   loads (when the initial camera and the scene's up direction arrive), even
-  after it showed a framing; taken as a pan, it left a new viewer looking at
-  the origin, wherever the team. The team is framed again instead (also after
+  after it showed a framing; taken as a pan, it would leave a new viewer looking
+  at the origin, wherever the team. The team is framed again instead (also after
   viser's "Reset View", which goes to that view).
 * **Centre on team** (the View folder's button, key C): looks at the team again
   from the viewer's side at the framing distance and height; the pan is gone.
@@ -140,9 +140,9 @@ class ViewControls:
         hand on the camera.
 
         A coroutine, so viser runs it on its loop right after it stored the report: a
-        plain function ran on its thread pool, late on a loaded machine, and judged
-        whatever camera was there by then (a later report, or a move half written), so a
-        shown framing went unseen and the viewer's own view was framed over.
+        plain function would run on its thread pool, late on a loaded machine, and judge
+        whatever camera is there by then (a later report, or a move half written), so a
+        shown framing would go unseen and the viewer's own view be framed over.
         """
         with self._lock:  # never between a move's position and its point looked at
             look_at, position = _pose(camera)
@@ -184,8 +184,8 @@ class ViewControls:
         if not self._framed or asked or (reframe and self.follow.value) or (
                 stale and self.clock() - self._framed_at >= FRAME_AGAIN_S):
             # a new viewer: the page's first view; else from the viewer's own side. Framed
-            # again until the browser shows it: one that was still loading put its first
-            # camera back over the framing, and reported that.
+            # again until the browser shows it: one still loading puts its first camera
+            # back over the framing, and reports that.
             if asked or reframe:
                 self._side = position - look_at
             direction = self._side

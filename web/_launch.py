@@ -35,7 +35,7 @@ def default_gamepad() -> Path:
 
     The same rule as the default team (``gcs.cli``): a project directory's own
     mapping wins, and ``gcs demo`` started from anywhere else still finds the
-    shipped one (relative to the current directory alone, the pad was silently
+    shipped one (relative to the current directory alone, the pad would be silently
     off there).
     """
     return default_config(DEFAULT_GAMEPAD.name)
@@ -109,8 +109,8 @@ def run_demo(config: str, *, host: str, port: int, gamepad: Path | None,
 
     The GCS runs on the wall clock, as ``gcs run`` does with real vehicles: its
     setpoints then keep their schedule even when the sim's clock samples queue
-    up behind a busy machine's telemetry (on the sim clock they did not, and the
-    vehicles went into hold).
+    up behind a busy machine's telemetry (on the sim clock they would not, and the
+    vehicles would go into hold).
     """
     stop_on_signals()
     team = load_team(config)

@@ -150,8 +150,9 @@ class ControlPanel:
 
         Written only when the operator's value changed since the last tick, so a tick
         never undoes a click: viser stores a click's value first and runs its callback
-        later, on its thread pool, and a tick in between that rewrote the checkbox from
-        its older snapshot made the callback read that value back (guidance stuck off).
+        later, on its thread pool, and a tick in between that rewrites the checkbox from
+        its older snapshot would make the callback read that value back (guidance stuck
+        off).
         """
         if operator.guidance_on != self._guidance_shown:
             self._guidance_shown = operator.guidance_on

@@ -42,7 +42,7 @@ def ground_marks(scene: viser.SceneApi, extent: float) -> None:
     origin, labelled every metre out to ``extent`` m and "N" and "E" at their ends, and a
     marker at the origin.
 
-    The grid alone (a line every 0.5 m) gave neither the scale nor the way north.
+    The grid alone (a line every 0.5 m) gives neither the scale nor the way north.
     """
     mark = palette.GROUND_MARK
     reach = math.floor(extent)
