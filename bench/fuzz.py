@@ -1,13 +1,12 @@
 """Fuzzing every entry point that takes bytes from the network: counts per entry point.
 
-Why: anyone on the zenoh fabric, or on a vehicle's UDP port, can send anything.
-An adversarial test found a control message that killed the simulator, forged
-clock samples that threw the GCS clock 31 years ahead, and telemetry that
-printed tracebacks (``docs/security.md``). The suite fuzzes each entry point
-with ~10^4 generated inputs (``tests/test_fuzz_*.py``, hypothesis); this
-bench runs many more, from its own fast generators (random bytes, mutated real
-samples and frames, hostile JSON, frames with good checksums and random
-payloads), and checks the same properties for every input:
+Why: anyone on the zenoh fabric, or on a vehicle's UDP port, can send anything,
+and an entry point that trusts its bytes can be made to kill the simulator, throw
+the GCS clock years ahead or print tracebacks (``docs/security.md``). The suite
+fuzzes each entry point with ~10^4 generated inputs (``tests/test_fuzz_*.py``,
+hypothesis); this bench runs many more, from its own fast generators (random
+bytes, mutated real samples and frames, hostile JSON, frames with good
+checksums and random payloads), and checks the same properties for every input:
 
 - no exception escapes, except the documented ``ValueError`` refusals of the
   parsers (control messages, clock samples, truth samples);

@@ -14,18 +14,17 @@ which leaves out time the thread spent preempted or waiting for the GIL), the
 same tick run 200 times back to back (``tick_warm_ms_p50``: the code's own cost
 with warm caches) and tick start jitter p99 (ms) per team size.
 
-Why both: on this VM, code that has not run for a few tens of milliseconds
-runs 3-4 times slower (packing 100 setpoint frames: 0.14 ms back to back,
-0.5 ms after a 50 ms pause, also with a busy wait instead of the pause), and
-the 4 Hz loop always runs after such a pause.
+Why both: code that has not run for a few tens of milliseconds runs several
+times slower, also after a busy wait instead of a pause, and the 4 Hz loop
+always runs after such a pause (figures: docs/performance.md, "Why the loop
+figure stays above the warm one").
 
 Also for scale: the cost of one small numpy call back to back and 50 ms after
-the previous one (``numpy_call_us_*``): here about 2 and 60 us. Whatever ran
-in between evicted the caches; the tick's cost after the pause is therefore
-about the number of distinct calls it makes, which is why its numeric work is
-in a few compiled kernels and it has no Python loop over the vehicles but the
-one that publishes their setpoints (a loop of a hundred trivial calls: about
-0.15 ms after the pause).
+the previous one (``numpy_call_us_*``). Whatever ran in between evicted the
+caches; the tick's cost after the pause is therefore about the number of
+distinct calls it makes, which is why its numeric work is in a few compiled
+kernels and it has no Python loop over the vehicles but the one that
+publishes their setpoints.
 
 For scale, it first measures how late a bare ``time.sleep`` loop wakes on
 this machine (p99, ms): the floor under any jitter figure. It measures the

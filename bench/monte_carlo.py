@@ -11,8 +11,9 @@ prints a line per run, then one JSON object on the last line:
 ``wall_s`` is the whole command (start-up included); ``cores_busy`` its CPU time
 (every process it started) over that; ``speedup`` is each run's flights a minute
 over the first run's. In lockstep a flight's simulator and GCS mostly take turns
-(the paper's flight alone keeps about 1.4 cores busy), so the speed-up is bounded by
-the free cores over that. Exit status 1 unless every flight completed.
+(the paper's flight alone keeps one core busy and part of another:
+docs/performance.md), so the speed-up is bounded by the free cores over that. Exit
+status 1 unless every flight completed.
 
     python bench/monte_carlo.py [--seeds 20] [--jobs 1,2] [--config C] [--scenario S]
                                 [--override-analysis]

@@ -14,9 +14,9 @@ stops the hogs. Prints a line per run, then one JSON object on the last line:
 ``cpu_s`` is the CPU time of the suite's processes (the commands and every process
 they waited for: workers, simulators, browsers), the hogs' not counted: the work the
 suite asks of the machine. ``reference_s`` is the CPU time of a fixed pure-Python
-workload measured before the runs, best of five: this shared VM's speed changes
-from hour to hour (nearly the same suite took 772 and 1007 CPU-s a few hours apart), so
-wall and CPU times are comparable across days only as multiples of it.
+workload measured before the runs, best of five: a shared VM's speed changes
+from hour to hour (docs/performance.md, "Measuring it"), so wall and CPU times are
+comparable across days only as multiples of it.
 
 Each run's whole output is kept in ``--keep`` (default: a temporary directory, named
 on the run's line) for the failures' tracebacks. Exit status 1 unless every run passed.
@@ -64,7 +64,8 @@ def with_workers(argv: list[str], workers: int) -> list[str]:
 
 def reference_s() -> float:
     """CPU seconds of a fixed pure-Python workload, the best of five: the machine's
-    speed at the moment (0.22-0.24 s on the 2-core VM of docs/performance.md, 2026-12-05)."""
+    speed at the moment (its figures on the 2-core VM: docs/performance.md, "Figures" of
+    "The project's own suite")."""
     best = float("inf")
     for _ in range(5):
         start = time.process_time()
