@@ -11,7 +11,7 @@ import pytest
 import yaml
 
 from gcs.analysis import analyze
-from gcs.analysis._worst_case import rope_pull
+from gcs.analysis._forces import rope_pull
 from gcs.config import load_team
 from tests.conftest import gcs_here, run_gcs
 

@@ -22,7 +22,7 @@ import yaml
 
 import gcs.app as gcs_app
 from gcs.analysis import analyze, safe_guidance
-from gcs.analysis._worst_case import gain_violation
+from gcs.analysis._violations import gain_violation
 from gcs.app import load_scenario
 from gcs.cli import main
 from gcs.common import ConfigError, load_yaml

@@ -19,9 +19,10 @@ import pytest
 import yaml
 
 from gcs.analysis import analyze, even_rope_lengths, static_load
+from gcs.analysis._scales import flown_scale_max
+from gcs.analysis._shares import accel_keeping_share
 from gcs.analysis._static_load import NoHangingPointError, accelerating_load
 from gcs.analysis._team_load import accelerating_share, worst_load
-from gcs.analysis._worst_case import _accel_keeping_share, flown_scale_max
 from gcs.common import ConfigError
 from gcs.config import Team, load_team
 from sim import (
@@ -494,7 +495,7 @@ def test_the_acceleration_limit_named_keeps_the_design_share(path: str, limit: f
     assert accelerating_share(team, beyond, flown).share > a.load.design_share
     # from a guess too high (the share's linear estimate is near exact on these teams)
     accel = team.config.limits.accel_norm
-    searched = _accel_keeping_share(team, a.load.design_share, accel, accel, flown)
+    searched = accel_keeping_share(team, a.load.design_share, accel, accel, flown)
     assert accelerating_share(team, searched, flown).share <= a.load.design_share
     assert searched == pytest.approx(named, abs=0.002 * accel)
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from gcs.analysis._worst_case import Analysis
+from gcs.analysis._certificate import Analysis
 from gcs.config import GuidanceConfig, Team
 
 __all__ = ["safe_guidance"]
