@@ -226,8 +226,9 @@ class TeamFrame:
             n, e, d = (p + u * dt for p, u in zip(local.p_ned, local.v_ned, strict=True))
             v.pairs.append(((msg.lat * 1e-7, msg.lon * 1e-7, msg.alt * 1e-3), (n, e, d)))
             fixes, positions = zip(*v.pairs, strict=True)
-            v.origin = _point(local_origin(fixes, positions))
-            v.source = "GLOBAL_POSITION_INT"
+        origin = _point(local_origin(fixes, positions))  # off the lock: a few conversions a pair
+        with self._lock:  # this vehicle's messages come one at a time (its link's thread)
+            v.origin, v.source = origin, "GLOBAL_POSITION_INT"
             self._answered.notify_all()
         self._update(v)
 

@@ -1,8 +1,9 @@
 """MAVLink 2 on the wire: what a GCS and a vehicle must agree on, byte for byte.
 
 The dialect, framing and checksums, signing, the setpoint, telemetry and mode
-numbers, the zenoh key names (:mod:`gcs.wire.keys`), and the wire formats of the
-sim clock and the sim's truth. The simulated vehicles (``vehicles/``) and the sim
+numbers, the zenoh key names (:mod:`gcs.wire.keys`), the wire formats of the
+sim clock and the sim's truth, and the WGS-84 geodesy of global positions (the
+team frame's too). The simulated vehicles (``vehicles/``) and the sim
 host (``sim/``) use this package and nothing of the GCS's link layer.
 
 Modules:

@@ -172,7 +172,8 @@ def _unwrapped(lla: ArrayLike) -> np.ndarray:
     antimeridian, 179.9 and -179.9 are 0.2 degrees apart, not 359.8)."""
     g = np.array(lla, dtype=np.float64).reshape(-1, 3)
     turn = g[:, 1] - g[0, 1]
-    g[:, 1] -= 360.0 * ((turn > 180.0).astype(float) - (turn < -180.0))
+    g[turn > 180.0, 1] -= 360.0
+    g[turn < -180.0, 1] += 360.0
     return g
 
 
