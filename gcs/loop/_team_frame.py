@@ -75,11 +75,11 @@ Note = Callable[[str, str], None]
 
 # -- geodesy (gcs.wire's, on the WGS-84 ellipsoid) ----------------------------------------------
 
-Lla = tuple[float, float, float]
+_Lla = tuple[float, float, float]
 """Latitude, longitude (deg) and altitude (m)."""
 
 
-def _lla(p: GeoPoint) -> Lla:
+def _lla(p: GeoPoint) -> _Lla:
     return (p.lat, p.lon, p.alt)
 
 
@@ -113,7 +113,7 @@ class _Vehicle:
     source: str = ""  # where the origin came from
     reported_at: float = -math.inf  # monotonic time of the latest GPS_GLOBAL_ORIGIN
     local: LocalPosition | None = None
-    pairs: deque[tuple[Lla, Lla]] = field(default_factory=lambda: deque(maxlen=_PAIRS))
+    pairs: deque[tuple[_Lla, _Lla]] = field(default_factory=lambda: deque(maxlen=_PAIRS))
     """(fix, local NED position at the fix's instant) each."""
     armed: bool = False
     heard: bool = False
