@@ -14,8 +14,7 @@ from typing import Any
 from pymavlink import mavutil
 
 from gcs.flightlog import TlogIndex, TlogRecorder
-from gcs.flightlog._flight import EARTH_RADIUS_M
-from gcs.wire import CUSTOM_MODE_ENABLED, SAFETY_ARMED, MavlinkEncoder, mavlink
+from gcs.wire import CUSTOM_MODE_ENABLED, SAFETY_ARMED, MavlinkEncoder, mavlink, ned_to_geodetic
 
 VEHICLES = (1, 2, 3, 4)
 """The system ids of the short flight's vehicles (configs/bebop_square.yaml)."""
@@ -37,11 +36,9 @@ def true_position(sysid: int, t: float) -> tuple[float, float, float]:
 
 
 def field_fix(north: float, east: float, down: float) -> tuple[float, float, float]:
-    """Latitude, longitude (deg) and altitude (m) of a point NED about HOME, flat earth."""
-    lat0, lon0, alt0 = HOME
-    return (lat0 + math.degrees(north / EARTH_RADIUS_M),
-            lon0 + math.degrees(east / (EARTH_RADIUS_M * math.cos(math.radians(lat0)))),
-            alt0 - down)
+    """Latitude, longitude (deg) and altitude (m) of a point NED about HOME (WGS-84)."""
+    lat, lon, alt = ned_to_geodetic((north, east, down), HOME)
+    return float(lat), float(lon), float(alt)
 
 
 def raw_messages(path: Path, dialect: str = "common") -> list[Any]:

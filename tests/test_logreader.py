@@ -199,7 +199,7 @@ def test_ardupilot_vehicles_are_placed_in_one_frame(tmp_path: Path, shared_origi
         assert _placing(log) == [
             "a shared local frame (the vehicles' LOCAL_POSITION_NED origins differ by up to "
             f"6.0 m): drawn from GLOBAL_POSITION_INT about {lat:.6f}, {lon:.6f}, "
-            f"{alt:.1f} m, flat earth"]
+            f"{alt:.1f} m, WGS-84"]
     four = log.tracks[4]  # attitude, mode and battery, no position: kept
     assert len(four.t) == 0 and len(four.att_t) == 60 and four.mode(-1) == "GUIDED"
     assert bool(four.armed[-1]) and four.battery[-1] == 88.0
@@ -230,7 +230,7 @@ def test_a_vehicle_with_one_kind_of_position_joins_the_team_frame(
         lat, lon, alt = HOME
         assert _placing(log) == [
             "local positions from vehicle 3 (about the others' local origin): drawn from "
-            f"GLOBAL_POSITION_INT about {lat:.6f}, {lon:.6f}, {alt:.1f} m, flat earth"]
+            f"GLOBAL_POSITION_INT about {lat:.6f}, {lon:.6f}, {alt:.1f} m, WGS-84"]
     else:
         ids = (1, 2, 3)
         assert len(log.tracks[4].t) == 0 and len(log.tracks[4].att_t) == 60

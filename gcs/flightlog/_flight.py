@@ -16,7 +16,6 @@ logged (see :func:`_team_frame` for where each one is placed).
 
 from __future__ import annotations
 
-import math
 from collections import defaultdict
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -29,18 +28,23 @@ from gcs.flightlog._metrics import FlightMetrics
 from gcs.flightlog._reader import TlogIndex
 from gcs.flightlog._recorder import ARRAY_SPAN, ARRAYS, TeamHeader, chunked, parse_team_header
 from gcs.loop import Phase
-from gcs.wire import SAFETY_ARMED, heartbeat_mode_text, mavlink, message_id
+from gcs.wire import (
+    SAFETY_ARMED,
+    geodetic_median,
+    geodetic_to_ned,
+    heartbeat_mode_text,
+    local_origin,
+    mavlink,
+    message_id,
+)
 
-__all__ = ["EARTH_RADIUS_M", "ORIGIN_TOLERANCE_M", "FlightLog", "Track", "tilt_angle"]
+__all__ = ["ORIGIN_TOLERANCE_M", "FlightLog", "Track", "tilt_angle"]
 
 _ARRAY_OF = {base + k: name for name, base in ARRAYS.items() for k in range(ARRAY_SPAN)}
 _CHUNK_LEN = len(chunked(np.zeros(1000))[0])  # values per DEBUG_FLOAT_ARRAY message
 _POSITIONS = ("LOCAL_POSITION_NED", "GLOBAL_POSITION_INT")
 _TRACK_MESSAGES = (*_POSITIONS, "ATTITUDE", "HEARTBEAT", "SYS_STATUS")
 _MATCH_S = 0.5  # a local and a global position this close in time describe one moment
-
-EARTH_RADIUS_M = 6_378_137.0
-"""Equatorial radius (WGS-84) of the flat-earth conversion of GLOBAL_POSITION_INT, m."""
 
 ORIGIN_TOLERANCE_M = 1.0
 """Vehicles' LOCAL_POSITION_NED origins further apart than this are different frames, m."""
@@ -93,6 +97,9 @@ class FlightLog:
     missing: list[str] = field(default_factory=list)
     origin: tuple[float, float, float] | None = None  # lat, lon (deg), alt (m) of NED zero
     origin_spread: float = 0.0  # m, how far apart the vehicles' local origins are
+    local_origins: dict[int, tuple[float, float, float]] = field(default_factory=dict)
+    """Each vehicle's LOCAL_POSITION_NED origin (lat, lon, alt) where GLOBAL_POSITION_INT
+    beside it shows it (:func:`gcs.wire.local_origin`, as the live team frame takes it)."""
     from_global: tuple[int, ...] = ()  # vehicles placed from GLOBAL_POSITION_INT
     own_frame: tuple[int, ...] = ()  # vehicles with local positions only, left unplaced
 
@@ -113,7 +120,8 @@ class FlightLog:
         log = cls(index=index, gcs_sysid=gcs_sysid, ground=frozenset(ground), team=team,
                   tick_t=np.zeros(0), phase=np.zeros(0, dtype=int), values={}, arrays={},
                   tracks=tracks, texts=texts, origin=frame.origin, origin_spread=frame.spread,
-                  from_global=frame.from_global, own_frame=frame.own_frame)
+                  local_origins=frame.local_origins, from_global=frame.from_global,
+                  own_frame=frame.own_frame)
         log._assemble(ticks)
         return log
 
@@ -168,7 +176,7 @@ class FlightLog:
             else:
                 why = f"local positions{_whose(self.from_global)} (about the others' local origin)"
             self.missing.append(f"{why}: drawn from GLOBAL_POSITION_INT about "
-                                f"{lat:.6f}, {lon:.6f}, {alt:.1f} m, flat earth")
+                                f"{lat:.6f}, {lon:.6f}, {alt:.1f} m, WGS-84")
         if self.own_frame:
             self.missing.append(f"vehicle positions{_whose(self.own_frame)} in the team's frame "
                                 "(only LOCAL_POSITION_NED, about an origin no GLOBAL_POSITION_INT "
@@ -394,7 +402,10 @@ def _trim(name: str, flat: np.ndarray, team: TeamHeader | None) -> np.ndarray:
 
 
 _Samples = tuple[np.ndarray, np.ndarray, np.ndarray]
-"""Times (K,), positions (K, 3) and velocities (K, 3) of one vehicle, in time order."""
+"""Times (K,), positions (K, 3) and velocities (K, 3) of one vehicle, in time order: local
+positions in NED (m), or fixes as latitude, longitude (deg) and altitude (m)."""
+
+_Lla = tuple[float, float, float]
 
 
 @dataclass(frozen=True)
@@ -403,9 +414,10 @@ class _Frame:
 
     positions: dict[int, _Samples]
     from_global: tuple[int, ...]  # placed from GLOBAL_POSITION_INT
-    origin: tuple[float, float, float] | None  # NED zero (lat, lon, alt) when any was
+    origin: _Lla | None  # NED zero (lat, lon, alt) when any was
     spread: float  # m, how far apart the measured LOCAL_POSITION_NED origins are
     own_frame: tuple[int, ...]  # only local positions, about an origin not known: unplaced
+    local_origins: dict[int, _Lla]  # each measured LOCAL_POSITION_NED origin
 
 
 def _read_tracks(index: TlogIndex, ground: set[int],
@@ -422,7 +434,7 @@ def _read_tracks(index: TlogIndex, ground: set[int],
     vehicles = {s: c for s in index.systems() if s not in ground
                 and (c := _autopilot_component(index, s)) is not None}
     local: dict[int, _Samples] = {}
-    fixes: dict[int, tuple[np.ndarray, ...]] = {}
+    fixes: dict[int, _Samples] = {}
     for sysid, comp in vehicles.items():
         if len((track := _local_positions(index, sysid, comp))[0]):
             local[sysid] = track
@@ -442,8 +454,7 @@ def _read_tracks(index: TlogIndex, ground: set[int],
     return tracks, frame
 
 
-def _team_frame(local: dict[int, _Samples], fixes: dict[int, tuple[np.ndarray, ...]]
-                ) -> _Frame:
+def _team_frame(local: dict[int, _Samples], fixes: dict[int, _Samples]) -> _Frame:
     """Where each vehicle is placed: one rule, so the distances between them mean something.
 
     Each autopilot sets its LOCAL_POSITION_NED origin where its estimator
@@ -454,30 +465,38 @@ def _team_frame(local: dict[int, _Samples], fixes: dict[int, tuple[np.ndarray, .
       within :data:`ORIGIN_TOLERANCE_M` and, if a vehicle sends only fixes, at
       least one origin was measured. Vehicles with local positions are placed
       from them (one that sends only those is taken to share the origin); one
-      with only fixes at its flat-earth fix minus the shared origin (their
-      median), z included.
-    - Else the GPS frame: every vehicle with fixes is placed from them, flat
-      earth about the first fix of the lowest system id; one that sends only
-      local positions is not placed, its origin being unknown.
+      with only fixes in NED about the shared origin (their median), z included.
+    - Else the GPS frame: every vehicle with fixes is placed from them, NED about
+      the first fix of the lowest system id; one that sends only local positions
+      is not placed, its origin being unknown.
+
+    NED is the WGS-84 tangent plane of :mod:`gcs.wire`, as in the live team frame.
     """
-    reference = _first_fix(fixes[min(fixes)]) if fixes else None
-    placed: dict[int, tuple[np.ndarray, np.ndarray]] = {} if reference is None else {
-        s: (f[0], _flat_earth(f[1], f[2], f[3], reference)) for s, f in fixes.items()}
-    origins = _local_origins(local, placed)
-    o = np.array(list(origins.values())).reshape(-1, 3)
+    reference = fixes[min(fixes)][1][0] if fixes else None
+    origins = _local_origins(local, fixes)
+    o = (geodetic_to_ned(np.array(list(origins.values())), reference)
+         if origins and reference is not None else np.zeros((0, 3)))
     spread = float(np.linalg.norm(o[:, None] - o[None, :], axis=2).max()) if len(o) else 0.0
-    gps_only = sorted(set(placed) - set(local))
-    if spread <= ORIGIN_TOLERANCE_M and (len(o) or not gps_only):
-        zero = np.median(o, axis=0) if len(o) else np.zeros(3)
+    gps_only = sorted(set(fixes) - set(local))
+    measured = {s: _lla(lla) for s, lla in origins.items()}
+    if spread <= ORIGIN_TOLERANCE_M and (origins or not gps_only):
         positions = dict(local)
-        for s in gps_only:
-            positions[s] = (placed[s][0], placed[s][1] - zero, fixes[s][4])
-        origin = (None if reference is None or not gps_only
-                  else _from_flat_earth(zero, reference))
-        return _Frame(positions, tuple(gps_only), origin, spread, ())
-    positions = {s: (t, p, fixes[s][4]) for s, (t, p) in placed.items()}
-    return _Frame(positions, tuple(sorted(placed)), reference, spread,
-                  tuple(sorted(set(local) - set(placed))))
+        origin = None
+        if gps_only:
+            zero = geodetic_median(list(origins.values()))
+            for s in gps_only:
+                t, lla, v = fixes[s]
+                positions[s] = (t, geodetic_to_ned(lla, zero), v)
+            origin = _lla(zero)
+        return _Frame(positions, tuple(gps_only), origin, spread, (), measured)
+    assert reference is not None  # the GPS frame only when some vehicle sent fixes
+    positions = {s: (t, geodetic_to_ned(lla, reference), v) for s, (t, lla, v) in fixes.items()}
+    return _Frame(positions, tuple(sorted(fixes)), _lla(reference), spread,
+                  tuple(sorted(set(local) - set(fixes))), measured)
+
+
+def _lla(a: np.ndarray) -> _Lla:
+    return float(a[0]), float(a[1]), float(a[2])
 
 
 def _autopilot_component(index: TlogIndex, sysid: int) -> int | None:
@@ -491,30 +510,23 @@ def _autopilot_component(index: TlogIndex, sysid: int) -> int | None:
     return int(np.bincount(index.compid[recs]).argmax()) if len(recs) else None
 
 
-def _first_fix(fix: tuple[np.ndarray, ...]) -> tuple[float, float, float]:
-    """Latitude, longitude (deg) and altitude (m) of the first of a vehicle's fixes."""
-    _, lat, lon, alt, _ = fix
-    return float(lat[0]), float(lon[0]), float(alt[0])
+def _local_origins(local: dict[int, _Samples], fixes: dict[int, _Samples]
+                   ) -> dict[int, np.ndarray]:
+    """Each vehicle's LOCAL_POSITION_NED origin (lat, lon, alt), where known.
 
-
-def _local_origins(local: dict[int, _Samples],
-                   placed: dict[int, tuple[np.ndarray, np.ndarray]]) -> dict[int, np.ndarray]:
-    """Each vehicle's LOCAL_POSITION_NED origin in the frame of ``placed``, m, where known.
-
-    The median of its global position (``placed``: times and flat-earth NED)
-    minus its local position at the same moment (the latest local sample at
-    most :data:`_MATCH_S` before the fix); the median so a glitch moves nothing.
-    Only vehicles that send both, at matching times.
+    Its fixes each beside its local position at the same moment (the latest
+    local sample at most :data:`_MATCH_S` before the fix), through
+    :func:`gcs.wire.local_origin`. Only vehicles that send both, at matching times.
     """
     origins = {}
     for sysid, (tl, pl, _) in local.items():
-        if sysid not in placed:
+        if sysid not in fixes:
             continue
-        tg, pg = placed[sysid]
+        tg, lla, _ = fixes[sysid]
         k = np.searchsorted(tl, tg, side="right") - 1
         near = (k >= 0) & (tg - tl[np.maximum(k, 0)] <= _MATCH_S)
         if near.any():
-            origins[sysid] = np.median(pg[near] - pl[k[near]], axis=0)
+            origins[sysid] = local_origin(lla[near], pl[k[near]])
     return origins
 
 
@@ -534,8 +546,8 @@ def _local_positions(index: TlogIndex, sysid: int, comp: int
             np.column_stack((c["vx"], c["vy"], c["vz"])).astype(float))
 
 
-def _global_positions(index: TlogIndex, sysid: int, comp: int) -> tuple[np.ndarray, ...]:
-    """Times, latitude, longitude (deg), altitude (m) and NED velocity of the fixes.
+def _global_positions(index: TlogIndex, sysid: int, comp: int) -> _Samples:
+    """Times, latitude, longitude (deg) and altitude (m), and NED velocity of the fixes.
 
     A fix at exactly 0, 0 is the autopilot saying it has none.
     """
@@ -543,31 +555,7 @@ def _global_positions(index: TlogIndex, sysid: int, comp: int) -> tuple[np.ndarr
     fix = (c["lat"] != 0) | (c["lon"] != 0)
     c = c[fix]
     v = np.column_stack((c["vx"], c["vy"], c["vz"])).astype(float) * 0.01
-    return t[fix], c["lat"] * 1e-7, c["lon"] * 1e-7, c["alt"] * 1e-3, v
-
-
-def _flat_earth(lat: np.ndarray, lon: np.ndarray, alt: np.ndarray,
-                origin: tuple[float, float, float]) -> np.ndarray:
-    """North, east, down about ``origin`` on a flat earth (a sphere's tangent plane).
-
-    Good to centimetres over the few hundred metres a team flies; heights are
-    the autopilot's altitude above mean sea level, relative to the origin's.
-    """
-    lat0, lon0, alt0 = origin
-    north = np.radians(lat - lat0) * EARTH_RADIUS_M
-    east = np.radians(lon - lon0) * EARTH_RADIUS_M * np.cos(np.radians(lat0))
-    return np.column_stack((north, east, -(alt - alt0)))
-
-
-def _from_flat_earth(ned: np.ndarray, origin: tuple[float, float, float]
-                     ) -> tuple[float, float, float]:
-    """Latitude, longitude (deg) and altitude (m) of ``ned`` about ``origin``: the inverse
-    of :func:`_flat_earth`, to name the shared local origin in ``missing``."""
-    lat0, lon0, alt0 = origin
-    north, east, down = (float(x) for x in ned)
-    return (lat0 + math.degrees(north / EARTH_RADIUS_M),
-            lon0 + math.degrees(east / (EARTH_RADIUS_M * math.cos(math.radians(lat0)))),
-            alt0 - down)
+    return t[fix], np.column_stack((c["lat"] * 1e-7, c["lon"] * 1e-7, c["alt"] * 1e-3)), v
 
 
 def _track(index: TlogIndex, sysid: int, comp: int, t: np.ndarray, p: np.ndarray,

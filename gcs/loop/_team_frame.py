@@ -13,6 +13,8 @@ origin lies in the team frame, by the team file's ``team_frame.mode``
   over GLOBAL_POSITION_INT beside the LOCAL_POSITION_NED of the same instant
   (taken only while disarmed: in flight the origin stays put). The team origin
   is the config's, or the mean of every vehicle's origin once all are known.
+  The geodesy (WGS-84) and these origins are :mod:`gcs.wire`'s, which the log
+  reader places a recorded flight's vehicles with too.
   A vehicle without an origin has no position (NaN) and cannot be armed.
 * ``set_origin``: the GCS sends every vehicle the config's origin
   (SET_GPS_GLOBAL_ORIGIN) when it is first heard and again before arming, and
@@ -31,12 +33,13 @@ from __future__ import annotations
 import contextlib
 import functools
 import math
-import statistics
 import threading
 import time
 from collections import deque
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+
+import numpy as np
 
 from gcs.config import GeoPoint, Team
 from gcs.link import AutopilotProfile, LinkError
@@ -46,8 +49,9 @@ from gcs.wire import (
     LocalPosition,
     MavMessage,
     TelemetryRecord,
+    geodetic_mean,
     geodetic_to_ned,
-    ned_to_geodetic,
+    local_origin,
 )
 
 __all__ = ["ORIGIN_MOVE_NOTE_M", "PAIR_MAX_DT_S", "TeamFrame"]
@@ -71,21 +75,26 @@ Note = Callable[[str, str], None]
 
 # -- geodesy (gcs.wire's, on the WGS-84 ellipsoid) ----------------------------------------------
 
-def _geodetic_to_ned(point: GeoPoint, ref: GeoPoint) -> tuple[float, float, float]:
+_Lla = tuple[float, float, float]
+"""Latitude, longitude (deg) and altitude (m)."""
+
+
+def _lla(p: GeoPoint) -> _Lla:
+    return (p.lat, p.lon, p.alt)
+
+
+def _point(lla: np.ndarray) -> GeoPoint:
+    return GeoPoint(lat=float(lla[0]), lon=float(lla[1]), alt=float(lla[2]))
+
+
+def _ned(point: GeoPoint, ref: GeoPoint) -> tuple[float, float, float]:
     """``point`` as north, east, down (m) from ``ref``."""
-    n, e, d = geodetic_to_ned((point.lat, point.lon, point.alt), (ref.lat, ref.lon, ref.alt))
+    n, e, d = geodetic_to_ned(_lla(point), _lla(ref))
     return float(n), float(e), float(d)
 
 
-def _ned_to_geodetic(north: float, east: float, down: float, ref: GeoPoint) -> GeoPoint:
-    """The point ``north``, ``east``, ``down`` (m) from ``ref``."""
-    lat, lon, alt = ned_to_geodetic((north, east, down), (ref.lat, ref.lon, ref.alt))
-    return GeoPoint(lat=float(lat), lon=float(lon), alt=float(alt))
-
-
 def _distance(a: GeoPoint, b: GeoPoint) -> float:
-    n, e, d = _geodetic_to_ned(a, b)
-    return math.sqrt(n * n + e * e + d * d)
+    return math.hypot(*_ned(a, b))
 
 
 def _text(p: GeoPoint) -> str:
@@ -104,7 +113,8 @@ class _Vehicle:
     source: str = ""  # where the origin came from
     reported_at: float = -math.inf  # monotonic time of the latest GPS_GLOBAL_ORIGIN
     local: LocalPosition | None = None
-    pairs: deque[GeoPoint] = field(default_factory=lambda: deque(maxlen=_PAIRS))
+    pairs: deque[tuple[_Lla, _Lla]] = field(default_factory=lambda: deque(maxlen=_PAIRS))
+    """(fix, local NED position at the fix's instant) each."""
     armed: bool = False
     heard: bool = False
     placed: tuple[float, float] | None = None  # the offset last announced
@@ -214,13 +224,11 @@ class TeamFrame:
             if abs(dt) > PAIR_MAX_DT_S:
                 return
             n, e, d = (p + u * dt for p, u in zip(local.p_ned, local.v_ned, strict=True))
-            here = GeoPoint(lat=msg.lat * 1e-7, lon=msg.lon * 1e-7, alt=msg.alt * 1e-3)
-            v.pairs.append(_ned_to_geodetic(-n, -e, -d, here))
-            pairs = list(v.pairs)
-            v.origin = GeoPoint(lat=statistics.median(p.lat for p in pairs),
-                                lon=statistics.median(p.lon for p in pairs),
-                                alt=statistics.median(p.alt for p in pairs))
-            v.source = "GLOBAL_POSITION_INT"
+            v.pairs.append(((msg.lat * 1e-7, msg.lon * 1e-7, msg.alt * 1e-3), (n, e, d)))
+            fixes, positions = zip(*v.pairs, strict=True)
+        origin = _point(local_origin(fixes, positions))  # off the lock: a few conversions a pair
+        with self._lock:  # this vehicle's messages come one at a time (its link's thread)
+            v.origin, v.source = origin, "GLOBAL_POSITION_INT"
             self._answered.notify_all()
         self._update(v)
 
@@ -236,10 +244,7 @@ class TeamFrame:
                 origins = [v.origin for v in self._vehicles]
                 if any(o is None for o in origins):
                     return
-                known = [o for o in origins if o is not None]
-                self._origin = GeoPoint(lat=statistics.fmean(o.lat for o in known),
-                                        lon=statistics.fmean(o.lon for o in known),
-                                        alt=statistics.fmean(o.alt for o in known))
+                self._origin = _point(geodetic_mean([_lla(o) for o in origins if o is not None]))
                 notes.append(f"team frame: origin {_text(self._origin)}, the mean of the "
                              f"vehicles' own origins")
                 shifted = self._vehicles
@@ -260,7 +265,7 @@ class TeamFrame:
     def _offset(self, v: _Vehicle) -> tuple[float, float] | None:
         if v.origin is None or self._origin is None:
             return None
-        north, east, _down = _geodetic_to_ned(v.origin, self._origin)
+        north, east, _down = _ned(v.origin, self._origin)
         return (north, east)
 
     def _send_origin(self, v: _Vehicle) -> None:

@@ -1,8 +1,9 @@
 """MAVLink 2 on the wire: what a GCS and a vehicle must agree on, byte for byte.
 
 The dialect, framing and checksums, signing, the setpoint, telemetry and mode
-numbers, the zenoh key names (:mod:`gcs.wire.keys`), and the wire formats of the
-sim clock and the sim's truth. The simulated vehicles (``vehicles/``) and the sim
+numbers, the zenoh key names (:mod:`gcs.wire.keys`), the wire formats of the
+sim clock and the sim's truth, and the WGS-84 geodesy of global positions (the
+team frame's too). The simulated vehicles (``vehicles/``) and the sim
 host (``sim/``) use this package and nothing of the GCS's link layer.
 
 Modules:
@@ -14,7 +15,8 @@ Modules:
                     dropped.
     ``_dialect``    The one pymavlink dialect the project speaks, and name look-ups into it.
     ``_encoder``    MAVLink 2 encoding for one sender (the GCS, or one simulated vehicle).
-    ``_geodetic``   Geodetic positions and local NED frames on the WGS-84 ellipsoid.
+    ``_geodetic``   Geodetic positions, local NED frames and the team frame, on the WGS-84
+                    ellipsoid.
     ``_modes``      Flight-mode numbers of every autopilot the GCS drives, in one place.
     ``_seal``       Authenticated zenoh payloads that are not MAVLink: clock, clock ack,
                     truth, control.
@@ -60,8 +62,11 @@ from gcs.wire._encoder import (
 from gcs.wire._geodetic import (
     Geodetic,
     ecef_to_geodetic,
+    geodetic_mean,
+    geodetic_median,
     geodetic_to_ecef,
     geodetic_to_ned,
+    local_origin,
     ned_to_geodetic,
 )
 from gcs.wire._modes import (
@@ -177,11 +182,14 @@ __all__ = [
     "encode_clock",
     "encode_time",
     "frame_crc",
+    "geodetic_mean",
+    "geodetic_median",
     "geodetic_to_ecef",
     "geodetic_to_ned",
     "heartbeat_mode_text",
     "keys",
     "load_signing_key",
+    "local_origin",
     "mavlink",
     "message_id",
     "ned_to_geodetic",
