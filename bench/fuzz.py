@@ -4,7 +4,7 @@ Why: anyone on the zenoh fabric, or on a vehicle's UDP port, can send anything.
 An adversarial test found a control message that killed the simulator, forged
 clock samples that threw the GCS clock 31 years ahead, and telemetry that
 printed tracebacks (``docs/security.md``). The suite fuzzes each entry point
-with ~10^4 generated inputs (``tests/test_fuzz_*.py``, hypothesis); this
+with ~10^4 generated inputs (``tests/fuzz/``, hypothesis); this
 bench runs many more, from its own fast generators (random bytes, mutated real
 samples and frames, hostile JSON, frames with good checksums and random
 payloads), and checks the same properties for every input:

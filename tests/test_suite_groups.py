@@ -10,7 +10,13 @@ from types import SimpleNamespace
 
 import pytest
 
-from tests.conftest import WARMING, cache_rewritten, scheduled_first, wait_for_warm_up, warm_kernels
+from tests.support.scheduling import (
+    WARMING,
+    cache_rewritten,
+    scheduled_first,
+    wait_for_warm_up,
+    warm_kernels,
+)
 
 
 @pytest.fixture(scope="module")

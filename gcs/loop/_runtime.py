@@ -76,7 +76,7 @@ __all__ = ["HELD_SETPOINT_S", "HOLD_KP", "HOLD_KV", "LINK_DELAY_CAP_S", "Event",
 
 LINK_DELAY_CAP_S = 0.25
 """Largest round trip the guidance's prediction horizon follows, s: beyond it no lead saves
-the paper's gains at 4 Hz (tests/test_link_delay.py)."""
+the paper's gains at 4 Hz (tests/guidance/test_link_delay.py)."""
 
 ROPE_LEAD_CARRIED_MIN = 0.5
 """Least share of the payload's weight the thrusts must show on the ropes for the spin's rope

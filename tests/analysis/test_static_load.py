@@ -34,11 +34,11 @@ from sim import (
 from sim._config import SensorConfig, WorldConfig
 from sim._layout import Layout
 from sim._team_layout import team_layout
-from tests.conftest import gcs_here
+from tests.support.commands import gcs_here
+from tests.support.paths import DATA
 from vehicles import load_airframe, load_autopilot_config
 
 G = 9.80665
-DATA = Path(__file__).parent / "data"
 BEBOP2 = str(Path("configs/airframes/bebop2.yaml").resolve())
 TEAMS = ["configs/bebop_square.yaml", "configs/bebop_triangle.yaml",
          "configs/bebop_hexagon.yaml", str(DATA / "bebop_pentagon.yaml"),

@@ -13,7 +13,7 @@ import yaml
 from gcs.analysis import analyze
 from gcs.analysis._worst_case import rope_pull
 from gcs.config import load_team
-from tests.conftest import gcs_here, run_gcs
+from tests.support.commands import gcs_here, run_gcs
 
 SQUARE = "configs/bebop_square.yaml"
 G = 9.80665

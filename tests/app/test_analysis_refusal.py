@@ -11,9 +11,8 @@ import pytest
 
 from gcs.analysis import analyze
 from gcs.config import load_team
-from tests.conftest import SHORT, run_gcs
-
-ROOT = Path(__file__).resolve().parent.parent
+from tests.support.commands import run_gcs
+from tests.support.paths import ROOT, SHORT
 
 
 @pytest.fixture(scope="module")

@@ -1,7 +1,7 @@
 """Simulators forked from a warm server (gcs.app._simfork, sim._forkserver).
 
 The flight a forked simulator gives is the one a cold ``python -m sim`` gives, to the last
-digit: ``tests/test_fly_seeds.py`` compares a seed flown by ``gcs fly`` (a cold
+digit: ``tests/integration/test_fly_seeds.py`` compares a seed flown by ``gcs fly`` (a cold
 simulator) with the same seed from ``fly_seeds`` (forked).
 """
 
@@ -18,8 +18,7 @@ import pytest
 
 from gcs.app import SimProcess, SimStartError, _simfork, free_tcp_port
 from gcs.app._simfork import ForkedSim
-
-ROOT = Path(__file__).resolve().parents[1]
+from tests.support.paths import ROOT
 
 
 def _alive(pid: int) -> bool:

@@ -42,7 +42,8 @@ from gcs.app import free_tcp_port
 from gcs.testing import team_key
 from gcs.transport import ZenohSettings, open_session
 from gcs.wire import SimTruth, Unsealer, keys
-from tests.colours import hue_apart, hue_saturation_value
+from tests.support.colours import hue_apart, hue_saturation_value
+from tests.support.paths import ROOT
 from web import palette
 from web._browser_script import ABORT_ANSWERS, RECONNECT_AFTER_S, STALE_AFTER_S
 from web.wireviewer import SceneRecord
@@ -57,7 +58,6 @@ SCENE_GREEN_MIN = 500
 SCENE_MAGENTA_MIN = 50
 """Pixels of the ok vehicles' green and of the payload's magenta the start view must show
 (measured: see the printed counts; with either hidden, the count is 0)."""
-ROOT = Path(__file__).resolve().parents[1]
 CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
                  "--disable-background-networking", "--disable-component-update",
                  "--disable-sync"]
@@ -397,7 +397,7 @@ def scene_pixels(page, save: Path) -> tuple[int, int]:  # type: ignore[no-untype
 
     By hue and saturation, whatever the lighting's shade: no other colour of the
     scene comes near these hues (``web/palette.py``, the rule tested in
-    test_web_frame.py), nor do the page's notifications or the red abort button.
+    tests/web/test_frame.py), nor do the page's notifications or the red abort button.
     The screenshot is saved to ``save``.
     """
     import imageio.v3 as iio  # a viser dependency

@@ -1,7 +1,8 @@
 """The page of a ready team lists the checks before arming that fail, before ARM is pressed.
 
 The real simulator in lockstep (:class:`gcs.testing.SimTeam`), vehicle 3's bank
-limit raised over the team file's (``tests.test_prearm_sim``); its page
+limit raised over the team file's
+(:func:`tests.support.flights.ready_with_vehicle_3_raised`); its page
 (:class:`web.WebUi`) served in this process and viewed by headless Chromium.
 """
 
@@ -10,9 +11,9 @@ from __future__ import annotations
 import pytest
 
 from gcs.app import free_tcp_port
-from tests.test_prearm_sim import SQUARE, TOO_STEEP, ready_with_vehicle_3_raised
-from tests.test_web_browser import headless_chromium, wait_for
-from tests.test_web_view import open_viewer
+from tests.browser.test_live_demo import headless_chromium, wait_for
+from tests.browser.test_view import open_viewer
+from tests.support.flights import SQUARE_FILE, TOO_STEEP, ready_with_vehicle_3_raised
 from web import WebUi
 
 
@@ -22,7 +23,7 @@ def browser(tmp_path_factory):  # type: ignore[no-untyped-def]
 
 
 def test_the_ready_page_shows_a_failing_check(sim_team, browser) -> None:  # type: ignore[no-untyped-def]
-    team = sim_team(SQUARE, seed=1)
+    team = sim_team(SQUARE_FILE, seed=1)
     ready_with_vehicle_3_raised(team)
     ui = WebUi(team.app, port=free_tcp_port())
     ui.start()

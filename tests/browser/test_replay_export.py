@@ -28,7 +28,7 @@ import zstandard
 
 from gcs.app import free_tcp_port
 from gcs.flightlog import FlightLog
-from tests.conftest import gcs_here
+from tests.support.commands import gcs_here
 from web._export import EXPORT_RATE_HZ
 from web._replay import ReplayCursor
 from web._replay_page import ReplayUi
@@ -142,7 +142,7 @@ def test_export_to_a_missing_folder_is_one_line(short_flight: tuple[dict, Path],
 
 @pytest.fixture(scope="module")
 def browser(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Any]:
-    from tests.test_web_browser import headless_chromium  # skips without chromium
+    from tests.browser.test_live_demo import headless_chromium  # skips without chromium
 
     yield from headless_chromium(tmp_path_factory)
 
@@ -188,7 +188,7 @@ def settle(page: Any) -> None:
 
 def test_exported_page_scrubs_to_the_logged_positions(
         opened: tuple[Any, dict], exported: tuple[Path, Path, str], tmp_path: Path) -> None:
-    from tests.test_web_browser import scene_pixels
+    from tests.browser.test_live_demo import scene_pixels
 
     page, seen = opened
     log_path, out, _ = exported

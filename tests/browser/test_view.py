@@ -1,7 +1,7 @@
 """What a viewer sees in a real browser: the camera on the team, the events grouped.
 
 The paper's team flies in formation in lockstep with the real simulator
-(``tests.test_safety_flight.in_formation``) and is flown about 3 m from the
+(``tests.support.flights.in_formation``) and is flown about 3 m from the
 origin; its page (:class:`web.WebUi`) is served in this process and viewed by
 headless Chromium (Playwright). Each viewer's camera is read on the server
 (``client.camera``: what the browser reports, after it applied what it was
@@ -23,8 +23,7 @@ import pytest
 import viser
 
 from gcs.app import GcsApp, free_tcp_port
-from tests.test_safety_flight import break_vehicle, in_formation, sim_sleep
-from tests.test_web_browser import (
+from tests.browser.test_live_demo import (
     SCENE_GREEN_MIN,
     freshness,
     headless_chromium,
@@ -33,6 +32,7 @@ from tests.test_web_browser import (
     scene_pixels,
     wait_for,
 )
+from tests.support.flights import break_vehicle, in_formation, sim_sleep
 from web import WebUi
 from web._browser_script import RECONNECT_AFTER_S
 from web.wireviewer import WireViewer

@@ -10,7 +10,8 @@ from pathlib import Path
 import pytest
 
 from gcs.cli import main
-from tests.conftest import run_gcs
+from tests.support.commands import run_gcs
+from tests.support.paths import ROOT
 
 COMMANDS = {"analyze", "sim", "run", "demo", "fly", "replay", "report", "key", "certs"}
 
@@ -45,7 +46,7 @@ def test_help_lists_every_command(
 
 
 def test_the_readme_table_names_the_same_commands() -> None:
-    readme = Path(__file__).resolve().parents[1] / "README.md"
+    readme = ROOT / "README.md"
     rows = [line for line in readme.read_text().splitlines() if line.startswith("| `gcs ")]
     assert {row.split()[2] for row in rows} == COMMANDS
 

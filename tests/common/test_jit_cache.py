@@ -7,8 +7,8 @@ from pathlib import Path
 
 from gcs.common import _jit_cache
 from gcs.common._jit_cache import kernel_sources, refresh_numba_cache
+from tests.support.paths import ROOT
 
-ROOT = Path(__file__).resolve().parents[1]
 TREES = [ROOT / "gcs", ROOT / "vehicles", ROOT / "sim"]
 
 

@@ -12,8 +12,8 @@ import pytest
 
 from gcs.common import ConfigError, to_mapping
 from gcs.config import load_team
+from tests.support.paths import ROOT
 
-ROOT = Path(__file__).resolve().parents[1]
 TEAMS = sorted([*ROOT.glob("configs/bebop_*.yaml"), *ROOT.glob("tests/data/bebop_*.yaml")])
 
 

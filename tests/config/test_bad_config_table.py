@@ -33,7 +33,7 @@ from typing import Any
 import pytest
 import yaml
 
-from tests.conftest import SQUARE
+from tests.support.paths import SQUARE
 from vehicles import BEBOP2
 
 #: Longest CPU time of one case, s (the issue's 2 s; CPU time, so that a loaded machine

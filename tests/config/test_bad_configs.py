@@ -29,7 +29,8 @@ from gcs.common import ConfigError, load_yaml
 from gcs.config import load_team
 from gcs.formation import build_formation, motion_basis
 from gcs.loop import OperatorCommand
-from tests.conftest import SHORT, SQUARE, gcs_here, run_gcs
+from tests.support.commands import gcs_here, run_gcs
+from tests.support.paths import SHORT, SQUARE
 from vehicles import BEBOP2, load_airframe
 
 PAIR = Path("tests/data/bebop_pair.yaml")

@@ -13,7 +13,7 @@ from gcs.analysis import analyze
 from gcs.config import load_team
 from gcs.config._team import ConfigError
 from gcs.loop import load_gamepad_config
-from tests.conftest import gcs_here
+from tests.support.commands import gcs_here
 from vehicles import BEBOP2, load_airframe
 
 SQUARE = Path("configs/bebop_square.yaml")

@@ -23,9 +23,8 @@ from gcs.config import (
     load_team,
 )
 from gcs.wire import write_signing_key
-from tests.conftest import run_gcs
-
-ROOT = Path(__file__).resolve().parent.parent
+from tests.support.commands import run_gcs
+from tests.support.paths import ROOT
 
 
 def test_the_key_is_made_once_owner_only(tmp_path: Path) -> None:

@@ -17,7 +17,7 @@ import pytest
 
 from gcs.flightlog import FlightLog, TlogIndex, TlogRecorder
 from gcs.wire import CUSTOM_MODE_ENABLED, SAFETY_ARMED, MavlinkEncoder, SimMode, mavlink
-from tests.logfiles import HOME, ardupilot_log, field_fix, raw_messages, true_position
+from tests.support.logfiles import HOME, ardupilot_log, field_fix, raw_messages, true_position
 
 EPOCH = 1_700_000_000.0
 RATE = 10.0  # vehicle messages per second

@@ -13,7 +13,7 @@ from pymavlink import mavutil
 from gcs.flightlog import TlogRecorder
 from gcs.flightlog._recorder import ARRAYS
 from gcs.wire import MavlinkEncoder
-from tests.logfiles import raw_messages
+from tests.support.logfiles import raw_messages
 
 EPOCH = 1_700_000_000.0
 DIALECT = "ardupilotmega"  # read as Mission Planner reads a log

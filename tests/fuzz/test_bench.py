@@ -10,9 +10,9 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
-from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+from tests.support.paths import ROOT
+
 ENTRY_POINTS = {"sim_control", "clock", "sim_truth", "gcs_frames", "vehicle_endpoint",
                 "telemetry"}
 

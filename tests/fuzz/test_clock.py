@@ -20,7 +20,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from gcs.wire import CLOCK_MAX_BYTES, ClockGuard, ClockVerdict, decode_clock, encode_clock
-from tests.fuzzing import (
+from tests.support.fuzzing import (
     assert_quiet,
     fuzz_settings,
     mutate,

@@ -30,7 +30,7 @@ from sim import (
     load_world_config,
     paper_square,
 )
-from tests.fuzzing import (
+from tests.support.fuzzing import (
     assert_quiet,
     batches,
     datagrams,

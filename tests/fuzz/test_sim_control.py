@@ -15,7 +15,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from sim._faults import CONTROL_MAX_BYTES, ControlAction, ControlCommand, parse_control
-from tests.fuzzing import (
+from tests.support.fuzzing import (
     assert_quiet,
     batches,
     fuzz_settings,

@@ -18,7 +18,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from gcs.wire import TRUTH_MAX_BYTES, SimTruth
-from tests.fuzzing import (
+from tests.support.fuzzing import (
     assert_quiet,
     batches,
     fuzz_settings,

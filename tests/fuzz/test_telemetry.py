@@ -27,7 +27,7 @@ from gcs.wire import (
     mavlink,
 )
 from gcs.wire._telemetry import Imu
-from tests.fuzzing import assert_quiet, batches, datagrams, fuzz_settings, timed
+from tests.support.fuzzing import assert_quiet, batches, datagrams, fuzz_settings, timed
 
 TELEMETRY = [mavlink.MAVLINK_MSG_ID_HEARTBEAT, mavlink.MAVLINK_MSG_ID_LOCAL_POSITION_NED,
              mavlink.MAVLINK_MSG_ID_ATTITUDE, mavlink.MAVLINK_MSG_ID_ATTITUDE_QUATERNION,

@@ -10,7 +10,7 @@ import pytest
 from gcs.config import Team, load_team
 from gcs.guidance import Guidance, MotionDemand, finite_max_norm
 from gcs.guidance._law import relative_measurements
-from tests.double_integrator import fly, yaw_rotations
+from tests.support.double_integrator import fly, yaw_rotations
 
 TEAMS = ["configs/bebop_square.yaml", "configs/bebop_triangle.yaml",
          "configs/bebop_hexagon.yaml"]

@@ -2,7 +2,7 @@
 shape (gcs.loop._runtime follows the links' round trip; here the closed loop that says why).
 
 Planar double integrators under eq. udi at 4 Hz with a zero-order hold, as in
-tests/double_integrator.py, but the positions are read half a round trip late
+tests/support/double_integrator.py, but the positions are read half a round trip late
 and the setpoints act half a round trip late, as over a radio.
 """
 

@@ -1,4 +1,5 @@
-"""The formation model and motion synthesis against the paper's equations."""
+"""Eq. udi per vehicle against the paper: its stacked form, the steady centripetal
+acceleration, saturation, the sticks, the compiled kernel, each vehicle's own frame."""
 
 from __future__ import annotations
 
@@ -6,92 +7,12 @@ import numpy as np
 import pytest
 
 from gcs.config import load_team
-from gcs.formation import build_formation, motion_basis
-from gcs.formation._graph import is_infinitesimally_rigid
-from gcs.formation._motion import centripetal_matrix, edges_to_slots
+from gcs.formation._motion import edges_to_slots
 from gcs.guidance import Guidance, MotionDemand
 from gcs.guidance._law import formation_acceleration, relative_measurements, saturate
 from gcs.guidance._udi import to_ned_saturated
-from tests.double_integrator import yaw_rotations
-
-SQUARE = "configs/bebop_square.yaml"
-TEAMS = [SQUARE, "configs/bebop_triangle.yaml", "configs/bebop_hexagon.yaml"]
-
-# Eq. (B) of the paper, rows = vehicles 1..4, columns = z1..z6.
-PAPER_B = np.array([
-    [1, 0, 0, 1, 1, 0],
-    [-1, 1, 0, 0, 0, 1],
-    [0, 0, 1, 0, -1, -1],
-    [0, -1, -1, -1, 0, 0],
-])
-
-
-def test_square_incidence_is_eq_B() -> None:
-    f = load_team(SQUARE).formation
-    np.testing.assert_array_equal(f.incidence, PAPER_B)
-    np.testing.assert_allclose(f.distances, [1, np.sqrt(2), 1, 1, np.sqrt(2), 1])
-
-
-def test_rigidity() -> None:
-    square = np.array([[0.5, 0.5], [-0.5, 0.5], [-0.5, -0.5], [0.5, -0.5]])
-    ring = np.array([[0, 1], [1, 2], [2, 3], [3, 0]])
-    assert not is_infinitesimally_rigid(square, ring)  # a square without diagonals shears
-    assert is_infinitesimally_rigid(square, np.vstack([ring, [[0, 2]]]))
-    # collinear triangle: all distances kept to first order by a perpendicular motion
-    line = np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]])
-    assert not is_infinitesimally_rigid(line, np.array([[0, 1], [1, 2], [0, 2]]))
-
-
-def test_positions_realised_from_distances() -> None:
-    f = build_formation([1, 2, 3, 4], [(1, 2), (2, 3), (3, 4), (4, 1), (1, 3)],
-                        distances=[1.0, 1.0, 1.0, 1.0, np.sqrt(2)])
-    z = f.relative(f.positions)
-    np.testing.assert_allclose(np.linalg.norm(z, axis=1), [1, 1, 1, 1, np.sqrt(2)], atol=1e-6)
-    np.testing.assert_allclose(f.positions.mean(axis=0), 0, atol=1e-9)
-
-
-@pytest.mark.parametrize("config", TEAMS)
-def test_translation_disagreements_reproduce_velocity(config: str) -> None:
-    f = load_team(config).formation
-    basis = motion_basis(f)
-    for A, want in ((basis.translate_x, [1.0, 0.0]), (basis.translate_y, [0.0, 1.0])):
-        np.testing.assert_allclose(basis.desired_velocities(A), np.tile(want, (f.n, 1)),
-                                   atol=1e-12)
-        # like the paper's A_v: a vehicle only uses its own edges
-        assert np.all(A[f.incidence == 0] == 0)
-
-
-@pytest.mark.parametrize("config", TEAMS)
-def test_rotation_disagreements_reproduce_the_spin_about_the_centroid(config: str) -> None:
-    f = load_team(config).formation
-    basis = motion_basis(f)
-    spin = np.column_stack((-f.positions[:, 1], f.positions[:, 0]))  # omega x r, 1 rad/s
-    np.testing.assert_allclose(basis.desired_velocities(basis.rotate), spin, atol=1e-12)
-    assert np.all(basis.rotate[f.incidence == 0] == 0)
-
-
-def test_square_rotation_uses_the_sides_with_equal_disagreements() -> None:
-    """The paper's spin: each vehicle combines its two sides; the diagonal is radial."""
-    f = load_team(SQUARE).formation
-    R = motion_basis(f).rotate
-    diagonals = [1, 4]
-    np.testing.assert_allclose(R[:, diagonals], 0, atol=1e-12)
-    sides = np.abs(R[np.abs(R) > 1e-9])
-    np.testing.assert_allclose(sides, 0.5)  # omega * side / 2 per rad/s
-
-
-@pytest.mark.parametrize("config", TEAMS)
-@pytest.mark.parametrize("vx, vy, omega", [(0.0, 0.0, 0.4), (0.5, -0.2, 0.3), (0.7, 0.1, 0.0)])
-def test_proposition_1_centripetal_term(config: str, vx: float, vy: float, omega: float) -> None:
-    """A_a zhat* equals the acceleration of the rigid motion: omega x v*."""
-    f = load_team(config).formation
-    basis = motion_basis(f)
-    A_v = basis.velocity_matrix(vx, vy, omega, 1.0)
-    z = f.relative(f.positions)
-    zhat = z / np.linalg.norm(z, axis=1, keepdims=True)
-    a = centripetal_matrix(A_v, f.incidence, f.distances) @ zhat
-    v = basis.desired_velocities(A_v)
-    np.testing.assert_allclose(a, omega * np.column_stack((-v[:, 1], v[:, 0])), atol=1e-12)
+from tests.support.double_integrator import yaw_rotations
+from tests.support.paths import SQUARE, TEAMS
 
 
 @pytest.mark.parametrize("config", TEAMS)

@@ -32,7 +32,8 @@ from gcs.app import (
 from gcs.app._scenario import scenario_scales
 from gcs.common import ConfigError
 from gcs.config import load_team
-from tests.conftest import SHORT, SQUARE, gcs_here, run_gcs
+from tests.support.commands import gcs_here, run_gcs
+from tests.support.paths import SHORT, SQUARE
 
 PAPER = "configs/scenarios/paper_flight.yaml"
 

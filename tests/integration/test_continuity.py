@@ -27,8 +27,8 @@ from gcs.loop import FleetState, Phase, RuntimeSnapshot
 from gcs.loop._runtime import HOLD_KP, HOLD_KV
 from gcs.transport import ZenohSettings
 from gcs.wire import SimMode
-from tests.test_safety_flight import break_vehicle, in_formation, sim_sleep
-from tests.test_setpoint_stream import hovering
+from tests.integration.test_setpoint_stream import hovering
+from tests.support.flights import break_vehicle, in_formation, sim_sleep
 
 TEAM = load_team("configs/bebop_square.yaml")
 OFFBOARD = ("OFFBOARD",) * 4

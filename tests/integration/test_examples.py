@@ -20,8 +20,8 @@ import pytest
 from gcs.analysis import analyze
 from gcs.common import shipped_config
 from gcs.config import load_team
+from tests.support.paths import ROOT
 
-ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
 #: The examples this file runs; a new one must get its test here.
 RUN_HERE = ("01_analyse_a_team.py", "02_fly_headless.py", "03_read_a_log.py")

@@ -19,8 +19,9 @@ from gcs.config import load_team
 from gcs.loop import ClockStoppedError
 from gcs.testing import Host, Metrics
 from gcs.transport import ZenohSettings
-from tests.conftest import SHORT, run_gcs
-from tests.conftest import SQUARE as CONFIG
+from tests.support.commands import run_gcs
+from tests.support.paths import SHORT
+from tests.support.paths import SQUARE as CONFIG
 
 TEAM = load_team(CONFIG)
 

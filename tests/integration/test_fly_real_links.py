@@ -27,10 +27,9 @@ from gcs.app._simprocess import SimStartError
 from gcs.common import ConfigError
 from gcs.flightlog import FlightLog
 from gcs.testing import SimulatorOnlyError, Team
-from tests.conftest import SQUARE, run_gcs
-from tests.test_simhost_udp import free_udp_ports
-
-ROOT = Path(__file__).resolve().parent.parent
+from tests.support.commands import run_gcs
+from tests.support.paths import ROOT, SQUARE
+from tests.support.ports import free_udp_ports
 
 #: Every phase of a flight through lift, sticks, set down and land, in order (after
 #: "connect", unless every vehicle was heard before the first tick).

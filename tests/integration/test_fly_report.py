@@ -20,8 +20,9 @@ from gcs.flightlog import _report as report
 from gcs.flightlog._figstyle import FORMATS
 from gcs.flightlog._report import FIGURES
 from gcs.wire import SAFETY_ARMED
-from tests.conftest import SQUARE, gcs_here, run_gcs
-from tests.logfiles import VEHICLES, plain_copy, raw_messages
+from tests.support.commands import gcs_here, run_gcs
+from tests.support.logfiles import VEHICLES, plain_copy, raw_messages
+from tests.support.paths import SQUARE
 
 
 def test_short_flight_lifts_the_payload_and_keeps_the_shape(

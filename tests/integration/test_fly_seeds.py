@@ -17,7 +17,8 @@ from gcs.app import fly_seeds_in_parallel, parse_jobs
 from gcs.common import ConfigError
 from gcs.config import load_team
 from gcs.testing import Metrics, SeedRun, fly_seeds, spread
-from tests.conftest import SHORT, SQUARE, run_gcs
+from tests.support.commands import run_gcs
+from tests.support.paths import SHORT, SQUARE
 
 #: Sticks before the lift: the flight fails at its second step, a few seconds in.
 _FAILING = """name: sticks_on_the_ground

@@ -6,13 +6,12 @@ clock samples that threw the GCS clock 31 years ahead, telemetry with
 infinite values that printed tracebacks, a 10 MB payload that slowed the
 simulator tenfold. The last test sends random datagrams to a running
 simulator's UDP port (which it always survived) and checks that it still
-answers. The fuzz tests (``tests/test_fuzz_*.py``) cover the same entry points
+answers. The fuzz tests (``tests/fuzz/``) cover the same entry points
 with generated inputs; the security notes are in ``docs/security.md``.
 """
 
 from __future__ import annotations
 
-import contextlib
 import math
 import random
 import socket
@@ -48,6 +47,7 @@ from gcs.wire import (
 )
 from gcs.wire._setpoints import accel_setpoint_message
 from sim._faults import CONTROL_MAX_BYTES, ControlAction, ControlCommand, parse_control
+from tests.support.ports import free_udp_ports
 
 TEAM = load_team("configs/bebop_square.yaml")
 NESTED = b'{"a":' * 100_000
@@ -320,21 +320,6 @@ def test_the_gcs_drops_oversize_frame_payloads_cheaply_and_counts_them() -> None
 
 
 # -- the running simulator -----------------------------------------------------------------------
-
-def free_udp_ports(count: int) -> int:
-    """First of ``count`` consecutive UDP ports on 127.0.0.1 that were free a moment ago."""
-    for _ in range(50):
-        base = random.randrange(20000, 60000)
-        with contextlib.ExitStack() as stack:
-            try:
-                for port in range(base, base + count):
-                    sock = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
-                    sock.bind(("127.0.0.1", port))
-            except OSError:
-                continue
-            return base
-    raise RuntimeError("no block of free UDP ports")
-
 
 @dataclass
 class RunningSim:

@@ -11,7 +11,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from tests.conftest import SHIPPED, run_outside
+from tests.support.commands import run_outside
+from tests.support.paths import SHIPPED
 
 
 def test_the_wheel_ships_the_configs(installed: tuple[Path, Path]) -> None:

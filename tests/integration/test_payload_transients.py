@@ -25,7 +25,7 @@ from gcs.analysis import analyze
 from gcs.config import Team, load_team
 from gcs.guidance import Guidance, MotionDemand, rope_growth_lead, rope_pull_ned, rope_turn_lead
 from gcs.testing import SimTeam
-from tests.conftest import SQUARE
+from tests.support.paths import SQUARE
 
 
 def _lift_and_set_down(team: Team) -> dict[str, float]:

@@ -1,6 +1,6 @@
 """The ``sim_team`` fixture in a user's own test suite, from the installed wheel.
 
-The wheel is built and installed into a fresh venv as tests/test_install.py
+The wheel is built and installed into a fresh venv as tests/integration/test_install.py
 does (its fixture); a suite is written into an empty directory: the example of
 docs/testing.md (arm, take off, lift, sticks, a cut link, a gust, set down,
 land, assertions on the metrics) and a test that fails on purpose after
@@ -23,7 +23,8 @@ import socket
 import subprocess
 from pathlib import Path
 
-from tests.conftest import ROOT, run_outside
+from tests.support.commands import run_outside
+from tests.support.paths import ROOT
 
 EXAMPLE = re.compile(r"<!-- the example: [^\n]*-->\n```python\n(.*?)```", re.S)
 

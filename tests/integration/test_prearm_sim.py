@@ -11,19 +11,14 @@ unless the team file lets the GCS set it back (read back from the simulator).
 from __future__ import annotations
 
 import dataclasses
-from pathlib import Path
 
 import pytest
 
 from gcs.config import Team, load_team
 from gcs.loop import Phase
-from gcs.testing import FlightError, SimTeam
-
-SQUARE = Path(__file__).resolve().parents[1] / "configs" / "bebop_square.yaml"
-RAISED = 30.0
-"""Vehicle 3's bank limit, raised over the square's 20 degrees before the arm, degrees."""
-TOO_STEEP = (f"vehicle 3: its tilt limit MPC_TILTMAX_AIR is {RAISED:g} degrees, above the "
-             f"config's bank limit of 20 degrees (limits.bank_deg)")
+from gcs.testing import FlightError
+from tests.support.flights import RAISED, TOO_STEEP, prearm, ready_with_vehicle_3_raised
+from tests.support.flights import SQUARE_FILE as SQUARE
 
 
 def square(**limits: object) -> Team:
@@ -31,22 +26,6 @@ def square(**limits: object) -> Team:
     team = load_team(SQUARE)
     return dataclasses.replace(team, config=dataclasses.replace(
         team.config, limits=dataclasses.replace(team.config.limits, **limits)))
-
-
-def ready_with_vehicle_3_raised(team: SimTeam) -> None:
-    """Wait until ready, then raise vehicle 3's bank limit on the simulator (PARAM_SET, as
-    another ground station would; the GCS hears the simulator's PARAM_VALUE)."""
-    team.wait_for("ready")
-    team.wait(1.5)
-    assert prearm(team) == ()  # the shipped simulator and team file agree: nothing fails
-    assert team.app.loop.profiles[3].set_tilt_limit_deg(RAISED) == RAISED
-    team.wait(1.5)  # the ready checks run about once a second
-
-
-def prearm(team: SimTeam) -> tuple[str, ...]:
-    snap = team.app.loop.snapshot
-    assert snap is not None
-    return snap.prearm
 
 
 def test_a_simulator_banking_beyond_the_limit_is_shown_while_ready_and_refused(

@@ -7,39 +7,20 @@ would.
 
 from __future__ import annotations
 
-import contextlib
 import time
 from collections.abc import Iterator
 
 import pytest
 
-from gcs.app import GcsApp, SimProcess, free_tcp_port
-from gcs.app._fly import CONTROL_ANSWER_S
+from gcs.app import GcsApp
 from gcs.app._scenario import Scenario, Step, play
-from gcs.config import Team, load_team
+from gcs.config import load_team
 from gcs.loop import Action, Phase
-from gcs.loop._clock import ClockStoppedError
 from gcs.loop._safety import SafetyReason
-from gcs.testing import team_key
-from gcs.transport import ZenohSettings
-from gcs.wire import Sealer, SimMode, keys
+from gcs.wire import SimMode
+from tests.support.flights import break_vehicle, in_formation, sim_sleep
 
 TEAM = load_team("configs/bebop_square.yaml")
-
-
-@contextlib.contextmanager
-def in_formation(team: Team = TEAM, *, speed: str = "max") -> Iterator[GcsApp]:
-    """``team`` in formation flight with the payload lifted, in lockstep with the real sim
-    (``speed``: its pace; a page watched in a browser wants a pace a viewer sees)."""
-    endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
-    with SimProcess(team.source, endpoint=endpoint, speed=speed, lockstep=True), \
-            GcsApp(team, zenoh_settings=ZenohSettings(connect=(endpoint,)), sim_clock=True,
-                   lockstep=True) as app:
-        app.start()
-        play(Scenario(name="up", steps=(Step(action="arm"), Step(action="takeoff"),
-                                          Step(action="lift"))), app.runtime, app.clock)
-        assert app.runtime.phase is Phase.FORMATION
-        yield app
 
 
 @pytest.fixture
@@ -47,29 +28,6 @@ def flying() -> Iterator[GcsApp]:
     """The paper's team in formation flight with the payload lifted."""
     with in_formation() as app:
         yield app
-
-
-def break_vehicle(app: GcsApp, action: str, sysid: int) -> None:
-    """Break vehicle ``sysid`` through the simulator's control queryable, which answers once
-    the fault is queued: it then acts at the sim time the test reads next (a put could reach
-    the simulator ticks later on a busy machine, and the test would time the wrong moment)."""
-    topic = keys.sim(app.fleet, "control")
-    sealed = Sealer(team_key(), topic).seal(
-        f'{{"action": "{action}", "sysid": {sysid}}}'.encode())
-    answers = [reply.ok.payload.to_bytes().decode()
-               for reply in app.session.get(topic, payload=sealed, timeout=CONTROL_ANSWER_S)
-               if reply.ok is not None]
-    assert answers == ["queued"], f"{action} {sysid}: the simulator answered {answers}"
-
-
-def sim_sleep(app: GcsApp, seconds: float) -> None:
-    """Wait ``seconds`` of sim time; if the sim clock stops, fail with the loop's latest
-    events (what the GCS was doing is the clue to why the lockstep stood still)."""
-    try:
-        app.clock.sleep_until(app.clock.now() + seconds)
-    except ClockStoppedError as exc:
-        events = "\n".join(f"  {e.level}: {e.text}" for e in app.runtime.events()[-15:])
-        raise AssertionError(f"{exc}; the GCS's latest events:\n{events}") from exc
 
 
 def hold_sticks(app: GcsApp, seconds: float) -> None:

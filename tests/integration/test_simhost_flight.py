@@ -13,7 +13,6 @@ import threading
 import time
 import uuid
 from collections.abc import Callable, Iterator
-from pathlib import Path
 
 import pytest
 import zenoh
@@ -38,8 +37,8 @@ from gcs.wire import (
     sim_mode_of,
 )
 from sim._faults import ControlAction, ControlCommand
+from tests.support.paths import ROOT
 
-ROOT = Path(__file__).resolve().parent.parent
 CONFIG = ROOT / "configs" / "bebop_square.yaml"
 ALTITUDE = 1.5
 

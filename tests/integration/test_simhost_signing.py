@@ -21,9 +21,9 @@ from gcs.wire._signing import write_signing_key
 from sim import DEFAULT_AUTOPILOT_CONFIG, DEFAULT_WORLD_CONFIG, load_world_config
 from sim._host import SimHost
 from sim._options import HostOptions
+from tests.support.paths import ROOT
 from vehicles import load_autopilot_config
 
-ROOT = Path(__file__).resolve().parent.parent
 CONFIG = ROOT / "configs" / "bebop_square.yaml"
 
 

@@ -16,7 +16,6 @@ import threading
 import time
 import uuid
 from collections.abc import Callable, Iterator
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -28,10 +27,10 @@ from gcs.config import load_team
 from gcs.testing import signed_connection
 from gcs.wire import Geodetic, geodetic_to_ned, mavlink
 from gcs.wire._setpoints import MASK_ACCEL_XY_POS_Z
-from tests.test_simhost_udp import free_udp_ports
+from tests.support.paths import ROOT
+from tests.support.ports import free_udp_ports
 from vehicles.endpoint import DEFAULT_REFERENCE
 
-ROOT = Path(__file__).resolve().parent.parent
 CONFIG = ROOT / "configs" / "bebop_square.yaml"
 GCS_SYSID = 240
 

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import dataclasses
 import re
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -26,8 +25,8 @@ from gcs.config import TeamFrameConfig, load_team
 from gcs.flightlog import FlightMetrics
 from gcs.loop import GatedClock
 from gcs.transport import ZenohSettings
+from tests.support.paths import ROOT
 
-ROOT = Path(__file__).resolve().parent.parent
 CONFIG = ROOT / "configs" / "bebop_square.yaml"
 SHORT = ROOT / "configs" / "scenarios" / "short_flight.yaml"
 

@@ -2,7 +2,7 @@
 own, the GCS here, 100 ms each way and 5 % loss between them (gcs.testing).
 
 Real time (a paced simulator: the slow lossy link is the subject here; lockstep across
-hosts is tests/test_fly_connect_lockstep.py), so the flight takes as long as it flies;
+hosts is tests/integration/test_fly_connect_lockstep.py), so the flight takes as long as it flies;
 what it checks is that the team keeps flying through the delays and stalls, not how
 fast the machine is.
 """

@@ -25,8 +25,8 @@ from websockets.sync.client import connect
 
 from gcs.app import free_tcp_port
 from gcs.cli import build_parser
+from tests.support.paths import ROOT
 
-ROOT = Path(__file__).resolve().parents[1]
 CONFIG = ROOT / "configs" / "bebop_square.yaml"
 
 

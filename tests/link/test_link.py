@@ -4,11 +4,9 @@ from __future__ import annotations
 
 import math
 import os
-import socket
 import threading
 import time
 from collections.abc import Iterator
-from dataclasses import dataclass
 
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as v20
@@ -16,45 +14,8 @@ from pymavlink.dialects.v20 import ardupilotmega as v20
 from gcs.link import Link
 from gcs.link._health import SequenceTracker
 from gcs.transport import FrameDirection, MavutilTransport
-from gcs.wire import FrameDecoder, MavlinkEncoder, MavMessage, Severity, Telemetry
-
-
-@dataclass
-class Rig:
-    """A Link on udpin and a plain UDP socket playing vehicle 1."""
-
-    link: Link
-    sock: socket.socket
-    port: int
-    vehicle: MavlinkEncoder
-
-    def send(self, *frames: bytes) -> None:
-        for frame in frames:
-            self.sock.sendto(frame, ("127.0.0.1", self.port))
-
-    def encode(self, msg: MavMessage) -> bytes:
-        return self.vehicle.encode(msg)
-
-    def wait(self, predicate: object, what: str) -> Telemetry:
-        return self.link.wait_for(predicate, timeout_s=3.0, what=what)  # type: ignore[arg-type]
-
-    def until(self, condition: object, what: str, timeout_s: float = 3.0) -> None:
-        deadline = time.monotonic() + timeout_s
-        while not condition():  # type: ignore[operator]
-            assert time.monotonic() < deadline, f"timed out waiting for {what}"
-            time.sleep(0.005)
-
-
-def make_rig(**link_options: object) -> Rig:
-    transport = MavutilTransport("udpin:127.0.0.1:0")
-    address = transport.local_address
-    assert address is not None
-    options = {"gcs_heartbeat_period_s": 0.0, "timesync_period_s": 0.0, **link_options}
-    link = Link(1, transport, **options).start()  # type: ignore[arg-type]
-    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    sock.bind(("127.0.0.1", 0))
-    sock.settimeout(2.0)
-    return Rig(link, sock, address[1], MavlinkEncoder(system_id=1, component_id=1))
+from gcs.wire import FrameDecoder, MavlinkEncoder, MavMessage, Severity
+from tests.support.links import Rig, heartbeat, make_rig
 
 
 @pytest.fixture
@@ -63,13 +24,6 @@ def rig() -> Iterator[Rig]:
     yield r
     r.link.close()
     r.sock.close()
-
-
-def heartbeat(rig: Rig, *, armed: bool = False, custom_mode: int = 3) -> bytes:
-    base = v20.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | (v20.MAV_MODE_FLAG_SAFETY_ARMED if armed else 0)
-    return rig.encode(rig.vehicle.mav.heartbeat_encode(
-        v20.MAV_TYPE_QUADROTOR, v20.MAV_AUTOPILOT_GENERIC, base, custom_mode,
-        v20.MAV_STATE_ACTIVE))
 
 
 def test_latest_telemetry_of_every_kind(rig: Rig) -> None:

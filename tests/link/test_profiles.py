@@ -1,6 +1,6 @@
 """Autopilot profiles and commands against a scripted autopilot on UDP loopback.
 
-The autopilot (:mod:`tests.scripted_autopilot`) is a thread speaking MAVLink 2
+The autopilot (:mod:`tests.support.scripted_autopilot`) is a thread speaking MAVLink 2
 through ``pymavlink.mavutil``, as a real PX4 or ArduPilot on a UDP port would,
 refusing what the real one would refuse and recording every violation of the
 expected sequence, which the tests then require to be empty.
@@ -39,7 +39,7 @@ from gcs.wire import (
     SimMode,
 )
 from gcs.wire._setpoints import MASK_ACCEL, MASK_ACCEL_XY_POS_Z
-from tests.scripted_autopilot import (
+from tests.support.scripted_autopilot import (
     ARM,
     DROP,
     GCS_SYSID,

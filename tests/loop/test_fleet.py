@@ -13,7 +13,7 @@ from pymavlink.dialects.v20 import ardupilotmega as v20
 from gcs.link._profiles import make_profile
 from gcs.loop import FleetTable
 from gcs.wire import SimMode
-from tests.test_link_link import Rig, heartbeat, make_rig
+from tests.support.links import Rig, heartbeat, make_rig
 
 
 @pytest.fixture

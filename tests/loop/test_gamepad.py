@@ -27,10 +27,10 @@ from gcs.common import ConfigError, from_mapping
 from gcs.config import OperatorConfig, load_team
 from gcs.loop import Gamepad, OperatorCommand, WallClock, load_gamepad_config
 from gcs.loop._gamepad import AXES_RETRY_S, GamepadConfig, GamepadMapper
+from tests.support.paths import ROOT
 from web._control_lock import ControlLock
 from web._launch import default_gamepad
 
-ROOT = Path(__file__).resolve().parents[1]
 MAPPING = ROOT / "configs" / "gamepad.yaml"
 OP = OperatorConfig(deadzone=0.05, expo=0.0, stick_timeout=5.0, altitude_max=4.0)
 GUI = load_team(ROOT / "configs" / "bebop_square.yaml").config.guidance

@@ -24,7 +24,7 @@ from gcs.config import Team, load_team
 from gcs.flightlog import FlightLog
 from gcs.loop import LoadSharing, estimated_shares, free_split
 from gcs.testing import SimTeam
-from tests.conftest import SQUARE
+from tests.support.paths import SQUARE
 
 TRIANGLE = "configs/bebop_triangle.yaml"
 HEXAGON = "configs/bebop_hexagon.yaml"

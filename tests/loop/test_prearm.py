@@ -1,7 +1,7 @@
 """Checks before arming, through the GCS loop's arm, against scripted autopilots.
 
 Four scripted PX4s and ArduPilots (real pymavlink bytes on UDP,
-:mod:`tests.scripted_autopilot`) on the paper's square, each with its own
+:mod:`tests.support.scripted_autopilot`) on the paper's square, each with its own
 origin and GPS as a real one has. A good start arms (ArduPilot in GUIDED
 first); each fault refuses the arm with one error naming the vehicle and the
 reason, and no vehicle is sent an arm command. While the team is ready, the
@@ -21,7 +21,7 @@ import pytest
 from gcs.config import GeoPoint, TeamFrameConfig, load_team
 from gcs.loop import Phase
 from gcs.wire import CopterMode, mavlink
-from tests.scripted_autopilot import ARM, REF, SET_MODE, SQUARE, Bench, moved, peer_team
+from tests.support.scripted_autopilot import ARM, REF, SET_MODE, SQUARE, Bench, moved, peer_team
 
 SQUARE_IDS = (1, 2, 3, 4)
 KINDS = {1: "ardupilot", 2: "ardupilot", 3: "px4", 4: "px4"}

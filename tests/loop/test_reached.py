@@ -14,7 +14,7 @@ import numpy as np
 from gcs.config import load_team
 from gcs.loop import Action, Phase
 from gcs.loop._reached import AltitudeReached
-from tests.scripted_autopilot import SQUARE, Geo, moved, peer_team
+from tests.support.scripted_autopilot import SQUARE, Geo, moved, peer_team
 
 
 def test_each_vehicle_is_counted_from_its_first_moment_there() -> None:

@@ -13,7 +13,7 @@ import numpy as np
 
 from gcs.loop import Phase
 from gcs.loop._safety import SafetyVerdict
-from tests.scripted_autopilot import HOVER_THRUST, fleet_state, peer_team
+from tests.support.scripted_autopilot import HOVER_THRUST, fleet_state, peer_team
 
 _CALM = SafetyVerdict(freeze=False, land=False, events=())
 

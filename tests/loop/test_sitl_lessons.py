@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from gcs.guidance import MotionDemand
-from tests.scripted_autopilot import HOVER_THRUST, fleet_state, peer_team
+from tests.support.scripted_autopilot import HOVER_THRUST, fleet_state, peer_team
 
 
 def test_the_spins_rope_lead_needs_the_thrusts_to_show_the_ropes_carrying() -> None:

@@ -21,7 +21,7 @@ import yaml
 from gcs.common import ConfigError
 from gcs.config import GeoPoint, TeamFrameConfig, load_team
 from gcs.loop import Runtime
-from tests.scripted_autopilot import REF, SQUARE, moved, peer_team
+from tests.support.scripted_autopilot import REF, SQUARE, moved, peer_team
 
 HEADING = math.radians(30.0)
 CENTRE = np.array([3.0, -2.0])  # the square's centre on the field, m north and east of REF

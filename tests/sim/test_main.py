@@ -30,8 +30,9 @@ from gcs.testing import signed_connection, team_key
 from gcs.transport import ZenohSettings, open_session
 from gcs.wire import Sealer, SimTruth, Unsealer, decode_clock, encode_time, keys
 from sim.__main__ import main as sim_main
+from tests.support.paths import ROOT
+from tests.support.ports import free_udp_ports
 
-ROOT = Path(__file__).resolve().parent.parent
 CONFIG = ROOT / "configs" / "bebop_square.yaml"
 CHUNK = 1.0 / 128.0
 
@@ -191,23 +192,6 @@ def test_duration_runs_as_fast_as_possible_and_exits_by_itself() -> None:
     assert proc.returncode == 0, err
     assert "sim: stopped at t = 3.000 s" in err
     assert time.monotonic() - start_wall < 30.0
-
-
-def free_udp_ports(count: int) -> int:
-    """A base port with ``count`` consecutive free UDP ports on loopback."""
-    for _ in range(50):
-        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
-            probe.bind(("127.0.0.1", 0))
-            base = probe.getsockname()[1]
-        try:
-            with contextlib.ExitStack() as stack:
-                for k in range(count):
-                    sock = stack.enter_context(socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
-                    sock.bind(("127.0.0.1", base + k))
-            return base
-        except OSError:
-            continue
-    raise RuntimeError(f"no {count} consecutive free UDP ports")
 
 
 def test_the_help_puts_the_first_vehicle_on_the_base_port() -> None:

@@ -10,7 +10,6 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from pathlib import Path
 
 import pytest
 
@@ -26,9 +25,10 @@ from sim import (
 from sim._host import SimHost
 from sim._options import HostOptions
 from sim._priority import can_lift
+from tests.support.paths import ROOT
 from vehicles import load_autopilot_config
 
-CONFIG = Path(__file__).resolve().parents[1] / "configs" / "bebop_square.yaml"
+CONFIG = ROOT / "configs" / "bebop_square.yaml"
 
 pytestmark = pytest.mark.skipif(not hasattr(os, "SCHED_IDLE"), reason="needs Linux")
 needs_lift = pytest.mark.skipif(hasattr(os, "SCHED_IDLE") and not can_lift(),

@@ -8,12 +8,9 @@ that connects to its own port (``udpout``).
 
 from __future__ import annotations
 
-import random
-import socket
 import time
 import uuid
 from collections.abc import Iterator
-from pathlib import Path
 
 import pytest
 from pymavlink import mavutil
@@ -22,29 +19,11 @@ from gcs.app import SimProcess, free_tcp_port
 from gcs.app._simprocess import SimStartError
 from gcs.testing import signed_connection
 from gcs.wire import SIM_PX4_MODES, SimMode, mavlink
+from tests.support.paths import ROOT
+from tests.support.ports import free_udp_ports
 
-ROOT = Path(__file__).resolve().parent.parent
 CONFIG = ROOT / "configs" / "bebop_square.yaml"
 GCS_SYSID = 245
-
-
-def free_udp_ports(count: int) -> int:
-    """First of ``count`` consecutive UDP ports on 127.0.0.1 that were free a moment ago."""
-    for _ in range(50):
-        base = random.randrange(20000, 60000)
-        sockets: list[socket.socket] = []
-        try:
-            for port in range(base, base + count):
-                s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-                sockets.append(s)
-                s.bind(("127.0.0.1", port))
-            return base
-        except OSError:
-            continue
-        finally:
-            for s in sockets:
-                s.close()
-    raise RuntimeError("no block of free UDP ports")
 
 
 RUNNING: list[SimProcess] = []

@@ -24,8 +24,8 @@ from sim import (
 )
 from sim._config import SensorConfig, WindConfig, WorldConfig
 from sim._world import World
+from tests.support.worlds import aloft
 from vehicles import (
-    Airframe,
     Autopilot,
     AutopilotConfig,
     load_airframe,
@@ -266,14 +266,6 @@ def test_sensors_deliver_their_configured_rates_and_noise(
     # Every axis of every sensor draws its own noise.
     correlation = np.corrcoef(per_channel.T) - np.eye(15)
     assert np.abs(correlation).max() < 0.1
-
-
-def aloft(airframe: Airframe) -> World:
-    """One vehicle 500 m up on a rope it never reaches: no ground, no rope, no wind."""
-    return World(airframe=airframe, config=load_world_config(DEFAULT_WORLD_CONFIG),
-                 p0_ned=np.array([[0.0, 0.0, -500.0]]), rope_length=np.array([1000.0]),
-                 payload_mass=0.4, payload_p0_ned=np.array([0.0, 0.0, -499.0]),
-                 rng=np.random.default_rng(0))
 
 
 @pytest.mark.parametrize("time_constant", [0.02, 0.05])

@@ -1,7 +1,7 @@
 """Hue, saturation and value of RGB colours, for the tests that check the scene's colours.
 
-One helper for both: the palette rule (tests/test_web_frame.py) and the pixels
-of a screenshot (tests/test_web_browser.py), vectorised for the latter.
+One helper for both: the palette rule (tests/web/test_frame.py) and the pixels
+of a screenshot (tests/browser/test_live_demo.py), vectorised for the latter.
 """
 
 from __future__ import annotations

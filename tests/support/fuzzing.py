@@ -1,4 +1,4 @@
-"""What the fuzz tests (``tests/test_fuzz_*.py``) share: settings, strategies, checks.
+"""What the fuzz tests (``tests/fuzz/``) share: settings, strategies, checks.
 
 Each fuzz test feeds one entry point that takes bytes from the network with
 generated inputs and checks, for every input: no exception escapes except the

@@ -32,7 +32,6 @@ import threading
 import time
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -47,6 +46,7 @@ from gcs.transport import MavutilTransport
 from gcs.wire import CopterMode, Px4AutoSubMode, Px4MainMode, SigningKey, SimMode
 from gcs.wire._modes import px4_custom_mode
 from gcs.wire._setpoints import MASK_ACCEL, MASK_ACCEL_XY_POS_Z
+from tests.support.paths import ROOT
 
 GCS_SYSID = 245
 HOVER_THRUST = 0.4
@@ -508,7 +508,7 @@ def first_time(records: list[Received]) -> float:
 
 # -- a team of scripted autopilots and the GCS loop -----------------------------------------------
 
-SQUARE = Path(__file__).resolve().parent.parent / "configs" / "bebop_square.yaml"
+SQUARE = ROOT / "configs" / "bebop_square.yaml"
 
 REF = Geo(47.397742, 8.545594, 488.0)
 """Where the test teams stand (a field near Zurich, PX4's SITL home)."""

@@ -13,25 +13,14 @@ from sim import (
     DEFAULT_AIRFRAME,
     DEFAULT_AUTOPILOT_CONFIG,
     DEFAULT_WORLD_CONFIG,
-    Layout,
     build_team,
     load_world_config,
     paper_square,
     take_off,
 )
-from sim._world import World
-from vehicles import Autopilot, AutopilotConfig, load_airframe, load_autopilot_config
+from tests.support.worlds import solo
+from vehicles import load_airframe, load_autopilot_config
 from vehicles._outcomes import Denial, RequestOutcome
-
-SOLO = Layout(np.zeros((1, 3)), np.array([20.0]), np.array([0.0, 3.0, 0.0]))
-"""One vehicle whose rope is too long to ever pull."""
-
-
-def solo(config: AutopilotConfig | None = None) -> tuple[World, Autopilot]:
-    return build_team(SOLO, payload_mass=0.4, rng=np.random.default_rng(8),
-                      airframe=load_airframe(DEFAULT_AIRFRAME),
-                      world_config=load_world_config(DEFAULT_WORLD_CONFIG),
-                      autopilot_config=config or load_autopilot_config(DEFAULT_AUTOPILOT_CONFIG))
 
 
 def denied(reason: Denial) -> RequestOutcome:

@@ -1,7 +1,7 @@
 """The simulated vehicle as PX4 looks to other ground stations: its modes, parameters, GPS,
 global position, home, origin and version, driven with real frames against real physics.
 
-As in ``test_simhost_endpoint``, a GCS-side encoder writes the bytes and the
+As in ``test_endpoint``, a GCS-side encoder writes the bytes and the
 endpoint's frames are decoded back; the modes are named by pymavlink's own
 ``mavutil`` (what MAVProxy shows) and asked for with its ``px4_map``.
 """
@@ -28,7 +28,7 @@ from gcs.wire import (
     sim_mode_for_px4,
     sim_mode_of,
 )
-from tests.test_simhost_endpoint import (
+from tests.vehicles.test_endpoint import (
     ACCEPTED,
     ARM,
     CHUNK,

@@ -26,8 +26,7 @@ from sim import (
 )
 from sim._dynamics import physics_step
 from sim._world import World
-from tests.test_autopilot_modes import solo
-from tests.test_sim_world import aloft
+from tests.support.worlds import aloft, solo
 from vehicles import Autopilot, load_airframe, load_autopilot_config, quat_to_rotation
 from vehicles._butterworth import biquad_reset, biquad_step, butterworth2
 from vehicles._estimator import estimate_step

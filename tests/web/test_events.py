@@ -10,15 +10,13 @@ from __future__ import annotations
 
 import subprocess
 import sys
-from pathlib import Path
 
 from gcs.link import LinkHealth
 from gcs.loop._runtime import Event
+from tests.support.paths import ROOT
 from web._events import EventLog, bursts, condition, conditions, split_vehicle
 from web._link_quality import LinkQuality, received_share
 from web._replay import ReplayEvent
-
-ROOT = Path(__file__).resolve().parents[1]
 
 
 def stale(t: float, vid: int, seconds: float) -> Event:

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,7 +13,8 @@ from gcs.config import load_team
 from gcs.formation import fit_shape
 from gcs.loop import FleetState
 from gcs.wire import SimTruth
-from tests.colours import hue_apart, hue_saturation_value
+from tests.support.colours import hue_apart, hue_saturation_value
+from tests.support.paths import ROOT
 from web import Trails, palette, quad_mesh
 from web._frame import (
     LABEL_LIFT,
@@ -28,7 +28,6 @@ from web._quadmesh import yaw_wxyz
 from web._scene import compass_at
 from web.palette import VehicleState
 
-ROOT = Path(__file__).resolve().parents[1]
 TEAM = load_team(ROOT / "configs" / "bebop_square.yaml")
 VIEW = TeamView.from_team(TEAM, analyze(TEAM))
 

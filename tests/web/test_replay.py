@@ -31,8 +31,8 @@ from viser import _messages as viser_messages
 from gcs.app import free_tcp_port
 from gcs.flightlog import FlightLog, TlogIndex
 from gcs.wire import SAFETY_ARMED, MavlinkEncoder, heartbeat_mode_text, mavlink
-from tests.conftest import gcs_here
-from tests.logfiles import ardupilot_log, plain_copy, raw_messages, with_frame
+from tests.support.commands import gcs_here
+from tests.support.logfiles import ardupilot_log, plain_copy, raw_messages, with_frame
 from web._actions import OperatorActions
 from web._control_lock import ControlLock
 from web._panel import ControlPanel

@@ -6,7 +6,6 @@ import dataclasses
 import html as html_lib
 import math
 import re
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,6 +18,7 @@ from gcs.loop import FenceVerdict, FleetState, OperatorSnapshot, Phase, RuntimeS
 from gcs.loop._runtime import Event
 from gcs.loop._safety import SafetyEvent, SafetyReason, SafetyVerdict
 from gcs.wire import SimTruth
+from tests.support.paths import ROOT
 from web import TeamView, palette
 from web._frame import rope_pull_estimate
 from web._history import History
@@ -32,7 +32,6 @@ from web._status import (
     vehicles_html,
 )
 
-ROOT = Path(__file__).resolve().parents[1]
 TEAM = load_team(ROOT / "configs" / "bebop_square.yaml")
 VIEW = TeamView.from_team(TEAM, analyze(TEAM))
 G = 9.80665

@@ -28,7 +28,8 @@ from gcs.flightlog import FlightLog
 from gcs.loop import FleetState, OperatorCommand
 from gcs.transport import ZenohSettings
 from gcs.wire import SimTruth
-from tests.logfiles import ardupilot_log
+from tests.support.logfiles import ardupilot_log
+from tests.support.paths import ROOT
 from web import SceneView, TeamView, Trails, WebUi, build_frame, palette, quad_mesh
 from web._actions import OperatorActions
 from web._camera import FOLLOW_STEP, FRAME_AGAIN_S, HANDS_OFF_S, MIN_VIEW_DISTANCE, team_view
@@ -40,7 +41,6 @@ from web._scene import compass_at
 from web._viser_threads import LoopEvent, wake_on_loop
 from web.wireviewer import WireViewer, decode_window
 
-ROOT = Path(__file__).resolve().parents[1]
 TEAM = load_team(ROOT / "configs" / "bebop_square.yaml")
 VIEW = TeamView.from_team(TEAM, analyze(TEAM))
 
