@@ -32,9 +32,11 @@ def in_formation(team: Team | None = None, *, speed: str = "max") -> Iterator[Gc
             GcsApp(team, zenoh_settings=ZenohSettings(connect=(endpoint,)), sim_clock=True,
                    lockstep=True) as app:
         app.start()
+        runtime = app.runtime
+        assert runtime is not None
         play(Scenario(name="up", steps=(Step(action="arm"), Step(action="takeoff"),
-                                          Step(action="lift"))), app.runtime, app.clock)
-        assert app.runtime.phase is Phase.FORMATION
+                                          Step(action="lift"))), runtime, app.clock)
+        assert runtime.phase is Phase.FORMATION
         yield app
 
 
@@ -57,7 +59,8 @@ def sim_sleep(app: GcsApp, seconds: float) -> None:
     try:
         app.clock.sleep_until(app.clock.now() + seconds)
     except ClockStoppedError as exc:
-        events = "\n".join(f"  {e.level}: {e.text}" for e in app.runtime.events()[-15:])
+        latest = app.runtime.events()[-15:] if app.runtime is not None else []
+        events = "\n".join(f"  {e.level}: {e.text}" for e in latest)
         raise AssertionError(f"{exc}; the GCS's latest events:\n{events}") from exc
 
 
