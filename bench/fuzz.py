@@ -3,7 +3,7 @@
 Why: anyone on the zenoh fabric, or on a vehicle's UDP port, can send anything,
 and an entry point that trusts its bytes can be made to kill the simulator, throw
 the GCS clock years ahead or print tracebacks (``docs/security.md``). The suite
-fuzzes each entry point with ~10^4 generated inputs (``tests/test_fuzz_*.py``,
+fuzzes each entry point with ~10^4 generated inputs (``tests/fuzz/``,
 hypothesis); this bench runs many more, from its own fast generators (random
 bytes, mutated real samples and frames, hostile JSON, frames with good
 checksums and random payloads), and checks the same properties for every input:

@@ -2,9 +2,10 @@
 
 Each package's ``__init__`` states its API (``__all__``); its other modules are
 private (``_name.py``) and no other package reaches into them. Packages form
-layers without cycles, the simulated vehicles load nothing of the GCS's link
-layer, and importing any package runs no work (the numba cache check waits for
-the first kernel built).
+layers without cycles, ``gcs`` never imports ``sim``, the simulated vehicles load
+nothing of the GCS's link layer, ``gcs analyze`` and ``gcs report`` load nothing of
+the page, and importing any package runs no work (the numba cache check waits for
+the first kernel built). The tests mirror the packages (``tests/README.md``).
 """
 
 from __future__ import annotations
@@ -17,7 +18,9 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+from tests.support.logfiles import ardupilot_log
+from tests.support.paths import ROOT, SQUARE
+
 TREES = ("gcs", "vehicles", "sim", "web")
 
 
@@ -179,6 +182,34 @@ def test_the_layers_are_as_documented() -> None:
     assert not graph["vehicles"] & {"gcs.transport", "gcs.config", "gcs.link"}
 
 
+def test_the_gcs_never_imports_the_simulator() -> None:
+    """README: ``gcs`` starts ``python -m sim`` as a process and never imports ``sim`` (the
+    layers alone would let ``gcs.app`` and above)."""
+    offences = [f"{name} imports {imported}" for name, path in _modules().items()
+                if name.split(".")[0] == "gcs"
+                for imported in _imports(path) if imported.split(".")[0] == "sim"]
+    assert not offences, "\n".join(offences)
+
+
+#: The folders of tests/ that are not a package's (tests/README.md): the command line's
+#: (gcs/cli.py), the whole system's, the browser's, the fuzzers', the helpers and the data.
+SUITE_FOLDERS = {"cli", "integration", "browser", "fuzz", "support", "data"}
+
+
+def test_the_tests_mirror_the_packages() -> None:
+    """Each folder of ``tests/`` is a package's (``tests/wire`` for ``gcs/wire``, ``tests/sim``
+    for ``sim``) or one of :data:`SUITE_FOLDERS`, and a package itself (data aside), so
+    that its modules import as ``tests.<folder>.<module>``."""
+    packages = {p.rpartition(".")[2] for p in _packages() if p != "gcs"}
+    folders = {p.name for p in (ROOT / "tests").iterdir()
+               if p.is_dir() and not p.name.startswith((".", "__"))}
+    strays = sorted(folders - packages - SUITE_FOLDERS)
+    assert not strays, f"tests/ folders of no package: {strays}"
+    missing = sorted(f for f in folders - {"data"}
+                     if not (ROOT / "tests" / f / "__init__.py").is_file())
+    assert not missing, f"tests/ folders without __init__.py: {missing}"
+
+
 def _loaded_after(statement: str) -> set[str]:
     code = f"import sys\n{statement}\nprint(' '.join(sorted(sys.modules)))"
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True,
@@ -228,6 +259,35 @@ def test_importing_the_packages_does_no_work() -> None:
     calls, touched, before, after = out.stdout.splitlines()
     assert (calls, touched, before) == ("0", "[]", "[]")
     assert after == "['gcs']"
+
+
+_COMMAND_PROBE = """
+import contextlib, io, sys
+from gcs.cli import main
+with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+    code = main(sys.argv[1:])
+print(code)
+print(' '.join(sorted(sys.modules)))
+"""
+
+
+@pytest.mark.parametrize("command", ["analyze", "report"])
+def test_analyze_and_report_load_nothing_of_the_page(command: str, tmp_path: Path) -> None:
+    """README: ``gcs analyze`` and ``gcs report`` load neither viser nor ``web`` (the page's
+    server and its libraries: seconds of CPU at start, for a command that serves no page).
+    Each runs in a process of its own to the end, on the paper's square and on a small
+    recorded log."""
+    if command == "analyze":
+        args = ["analyze", SQUARE]
+    else:
+        log = ardupilot_log(tmp_path / "flight.tlog", shared_origin=True, seconds=2.0)
+        args = ["report", str(log), "--out", str(tmp_path / "report")]
+    out = subprocess.run([sys.executable, "-c", _COMMAND_PROBE, *args], cwd=ROOT,
+                         capture_output=True, text=True, timeout=300, check=True)
+    code, modules = out.stdout.splitlines()[-2:]
+    assert code == "0", out.stdout + out.stderr
+    page = sorted({m.split(".")[0] for m in modules.split()} & {"viser", "web"})
+    assert not page, f"gcs {command} loaded {' and '.join(page)}"
 
 
 def test_public_modules_load_on_first_use() -> None:

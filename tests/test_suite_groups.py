@@ -1,5 +1,6 @@
-"""The suite's own scheduling (tests/conftest.py): tests sharing a fixture run on one worker,
-the long ones first, after the simulator's kernels are warm, the test modules rewritten once."""
+"""The suite's own scheduling (tests/conftest.py, tests/support/scheduling.py): tests sharing a
+fixture run on one worker, the long ones first, after the simulator's kernels are warm, the
+test modules of every folder rewritten once."""
 
 from __future__ import annotations
 
@@ -10,7 +11,15 @@ from types import SimpleNamespace
 
 import pytest
 
-from tests.conftest import WARMING, cache_rewritten, scheduled_first, wait_for_warm_up, warm_kernels
+from tests.support.paths import ROOT
+from tests.support.scheduling import (
+    WARMING,
+    cache_rewritten,
+    scheduled_first,
+    suite_modules,
+    wait_for_warm_up,
+    warm_kernels,
+)
 
 
 @pytest.fixture(scope="module")
@@ -79,3 +88,16 @@ def test_the_rewritten_test_modules_are_cached_for_the_workers(
     exec(code, namespace)
     with pytest.raises(AssertionError, match="assert 1 == 2"):  # rewritten: it says why
         namespace["check"](1)  # type: ignore[operator]
+
+
+def test_the_modules_rewritten_once_are_those_of_every_folder(
+        request: pytest.FixtureRequest) -> None:
+    """The controller rewrites the conftest files, the helpers and the test modules of every
+    folder of tests/ (it globbed tests/test_*.py alone before the tests had folders): each
+    folder has some, and every module this session collected is among them."""
+    modules = set(suite_modules())
+    folders = {p.parent for p in (ROOT / "tests").rglob("__init__.py")}
+    assert {m.parent for m in modules} == folders
+    assert ROOT / "tests" / "support" / "paths.py" in modules
+    collected = {Path(str(item.path)) for item in request.session.items}
+    assert collected <= modules, sorted(map(str, collected - modules))

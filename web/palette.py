@@ -9,8 +9,8 @@ the magenta of the payload. Nothing else in the scene reaches their hues, not
 even part-way along a ramp (edges and ropes go from neutral blue-greys to
 yellow and red), so the team and its payload stand out from the lines
 between them, and a test can find them in a screenshot by colour alone
-(``tests/test_web_browser.py``; the rule itself is tested in
-``tests/test_web_frame.py``).
+(``tests/browser/test_live_demo.py``; the rule itself is tested in
+``tests/web/test_frame.py``).
 """
 
 from __future__ import annotations

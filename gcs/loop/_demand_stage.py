@@ -29,7 +29,7 @@ __all__ = ["LINK_DELAY_CAP_S", "DemandStage"]
 
 LINK_DELAY_CAP_S = 0.25
 """Largest round trip the guidance's prediction horizon follows, s: beyond it no lead saves
-the paper's gains at 4 Hz (tests/test_link_delay.py)."""
+the paper's gains at 4 Hz (tests/guidance/test_link_delay.py)."""
 
 
 class DemandStage:
