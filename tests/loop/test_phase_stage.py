@@ -51,8 +51,9 @@ def test_the_lift_ends_once_the_ramp_ended_and_the_team_is_there() -> None:
         runtime.phases.set(Phase.LIFTING)
         low = fleet_state(team.formation.positions, HOVER_THRUST, altitude=1.0)
         there = fleet_state(team.formation.positions, HOVER_THRUST, altitude=2.0)
-        stage.advance(Phase.LIFTING, _at(1.9, 2.0), 1.0, there)  # the ramp goes on
-        stage.advance(Phase.LIFTING, _at(2.0, 2.0), 1.25, low)  # the team is not there
+        stage.advance(Phase.LIFTING, _at(2.0, 2.0), 1.0, low)  # the team is not there
+        assert runtime.phase is Phase.LIFTING
+        stage.advance(Phase.LIFTING, _at(1.9, 2.0), 1.25, there)  # the ramp goes on
         assert runtime.phase is Phase.LIFTING
         stage.advance(Phase.LIFTING, _at(2.0, 2.0), 1.5, there)
         assert runtime.phase is Phase.FORMATION
