@@ -147,6 +147,16 @@ class MavlinkEncoder:
         # takes them, so no reader ever pairs one table with another's row
         self._slot: tuple[_Counters, int] = (_Counters(1), 0)
 
+    def move_counters(self, counters: _Counters, row: int) -> None:
+        """Hand this encoder's counters over to row ``row`` of ``counters`` (a batch's),
+        under its lock so no frame is numbered meanwhile; the table they leave is no longer
+        current (its batch takes its encoders back before it numbers again)."""
+        with self._lock:
+            old, old_row = self._slot
+            counters.table[row] = old.table[old_row]
+            old.current = False
+            self._slot = (counters, row)
+
     def _counter_row(self) -> np.ndarray:
         counters, row = self._slot
         return counters.table[row]
@@ -261,7 +271,7 @@ class EncoderBatch:
         self._encoders = tuple(encoders)
         if len({id(e) for e in self._encoders}) != len(self._encoders):
             raise ValueError("an encoder appears twice in the batch")
-        mavs = [e._mav for e in self._encoders]
+        mavs = [e.mav for e in self._encoders]
         self._sysid = np.array([m.srcSystem for m in mavs], np.uint8)
         self._compid = np.array([m.srcComponent for m in mavs], np.uint8)
         self._signed = np.array([e.signed for e in self._encoders], np.bool_)
@@ -274,11 +284,7 @@ class EncoderBatch:
         each under its encoder's lock so no frame is numbered meanwhile."""
         counters = _Counters(len(self._encoders))
         for i, e in enumerate(self._encoders):
-            with e._lock:
-                old, row = e._slot
-                counters.table[i] = old.table[row]
-                old.current = False  # its batch, if any, takes its encoders back first
-                e._slot = (counters, i)
+            e.move_counters(counters, i)
         return counters
 
     def encoder(self, i: int) -> MavlinkEncoder:
