@@ -44,6 +44,7 @@ from pathlib import Path
 
 import numpy as np
 import viser
+import yaml
 
 from gcs.analysis import analyze
 from gcs.app import GcsApp, free_tcp_port
@@ -86,7 +87,10 @@ def moving_fleet(view: TeamView, t: float) -> tuple[FleetState, SimTruth]:
 
 def ring_config(n: int, radius: float, directory: Path) -> Path:
     """A team file of ``n`` vehicles on a circle (each joined to its two neighbours on
-    each side), the paper's airframe and gains; its GCS joins no zenoh peer."""
+    each side), the paper's airframe and gains; its GCS joins no zenoh peer. The circle
+    grows to keep neighbours 0.6 m apart (clear of each other's rotors), and the shape
+    is never shrunk."""
+    radius = max(radius, 0.6 * n / (2 * np.pi))
     config = SQUARE.read_text()
     head, _, rest = config.partition("\nvehicles:")
     guidance = rest[rest.index("\nguidance:"):]
@@ -98,8 +102,17 @@ def ring_config(n: int, radius: float, directory: Path) -> Path:
               f"{radius * math.sin(a[k]):.4f}]}}" for k in range(n)]
     lines.append("edges:")
     lines += [f"  - [{k + 1}, {(k + step) % n + 1}]" for k in range(n) for step in (1, 2)]
+    team = yaml.safe_load("\n".join(lines) + guidance)
+    # ropes that reach the payload under the centroid, and room above to lift it (the
+    # square's 1.12 m ropes hang nothing from a wide ring)
+    reach = math.ceil(radius * 1.5) + 3.0
+    team["payload"]["rope_length"] = radius * 1.5
+    team.setdefault("operator", {})["altitude_max"] = reach
+    team.setdefault("safety", {}).update(geofence_xy=1000.0, geofence_altitude=reach)
+    team["guidance"]["scale_min"] = 1.0
+    team["gcs"] = {"zenoh": {"mode": "peer", "connect": []}}
     path = directory / f"ring{n}.yaml"
-    path.write_text("\n".join(lines) + guidance + "\ngcs:\n  zenoh: {mode: peer, connect: []}\n")
+    path.write_text(yaml.safe_dump(team))
     return path
 
 
