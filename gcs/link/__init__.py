@@ -46,7 +46,7 @@ from gcs.link._errors import CommandAck, CommandError, LinkError
 from gcs.link._fanout import Fanout
 from gcs.link._health import LinkHealth
 from gcs.link._key_install import install_signing_key
-from gcs.link._link import Link
+from gcs.link._link import Link, Outbound
 from gcs.link._manager import LinkManager
 from gcs.link._params import ParamClient, ParamValue
 from gcs.link._profile import AutopilotProfile
@@ -62,6 +62,7 @@ __all__ = [
     "LinkError",
     "LinkHealth",
     "LinkManager",
+    "Outbound",
     "ParamClient",
     "ParamValue",
     "Presence",

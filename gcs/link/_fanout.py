@@ -16,6 +16,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from gcs.link._errors import LinkError
 from gcs.link._link import Link
 from gcs.wire import EncoderBatch, distinct_rows
 
@@ -33,7 +34,10 @@ class Fanout:
 
     def __init__(self, links: Sequence[Link]) -> None:
         self._links = tuple(links)
-        self._sends = [link.send_stamped for link in self._links]
+        outbound = [link.outbound() for link in self._links]
+        self._sends = [o.send for o in outbound]
+        self._closed = [o.closed for o in outbound]
+        self._listened = [o.listened for o in outbound]  # live lists
         # Taken in one global order, so two fanouts over overlapping links cannot deadlock.
         locks = {id(link.send_lock): link.send_lock for link in self._links}
         self._locks: list[threading.Lock] = [locks[k] for k in sorted(locks)]
@@ -71,15 +75,23 @@ class Fanout:
             data, width, lengths = self._batch.stamp_buffer(
                 packed, crc_extra) if whole else self._batch.stamp_buffer(
                 packed[rows], crc_extra, rows)
-            sends = self._sends  # a local: this loop runs once per vehicle and tick
+            # locals, one zip and no call per frame but the send: this loop runs once per
+            # vehicle and tick
+            sends, closed, listened = self._sends, self._closed, self._listened
             start = 0
             for i, size in zip(rows, lengths, strict=True):
                 frame = data[start:start + size]
                 start += width
-                try:  # a closed link's frame is numbered, never sent
+                if closed[i].is_set():  # numbered, never sent: closed for good
+                    failed[i] = LinkError(self._links[i].sysid, "link is closed")
+                    continue
+                try:
                     sends[i](frame)
                 except Exception as exc:
                     failed[i] = exc
+                    continue
+                if listened[i]:
+                    self._links[i].sent(frame)
         finally:
             for lock in reversed(self._locks):
                 lock.release()

@@ -20,6 +20,7 @@ import time
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence
 from types import MappingProxyType
+from typing import NamedTuple
 
 from gcs.common import join_thread
 from gcs.link._errors import CommandAck, CommandError, CommandResult, LinkError
@@ -42,7 +43,7 @@ from gcs.wire import (
     message_id,
 )
 
-__all__ = ["DEFAULT_TELEMETRY_RATES_HZ", "Link"]
+__all__ = ["DEFAULT_TELEMETRY_RATES_HZ", "Link", "Outbound"]
 
 _log = logging.getLogger(__name__)
 
@@ -67,6 +68,17 @@ class _PendingCommand:
     def __init__(self, command: int) -> None:
         self.command = command
         self.acks: deque[CommandResult] = deque()
+
+
+class Outbound(NamedTuple):
+    """A link's sending side, for a sender that numbers and sends its frames in a batch."""
+
+    send: Callable[[bytes], None]
+    """The transport's send of one frame."""
+    closed: threading.Event
+    """Set once the link is closed: its frames are then not sent."""
+    listened: Sequence[object]
+    """The link's frame listeners (live): when not empty, :meth:`Link.sent` each frame."""
 
 
 class Link:
@@ -334,6 +346,16 @@ class Link:
         if self._stop.is_set():
             raise LinkError(self._sysid, "link is closed")
         self._transport.send(frame)
+        self.sent(frame)
+
+    def outbound(self) -> Outbound:
+        """What a batch sender needs to send this link's numbered frames itself, with no
+        call per frame (:class:`~gcs.link.Fanout`: a fleet's setpoints each tick)."""
+        return Outbound(send=self._transport.send, closed=self._stop,
+                        listened=self._frame_listeners)
+
+    def sent(self, frame: bytes) -> None:
+        """Hand ``frame``, just sent under :attr:`send_lock`, to the frame listeners."""
         for listener in self._frame_listeners:
             self._call(listener, FrameDirection.OUT, frame)
 

@@ -95,8 +95,9 @@ class SetpointStream:
         a closed link) is reported through ``on_unsent`` and never raised.
         """
         vertical = np.array(altitude_z, dtype=float)
-        bad = [i for i in range(len(vertical)) if not math.isfinite(vertical[i])]
-        if bad:  # never reaches a vehicle, whatever its profile
+        bad: list[int] = []
+        if not np.isfinite(vertical).all():  # never reaches a vehicle, whatever its profile
+            bad = np.flatnonzero(~np.isfinite(vertical)).tolist()
             for i in bad:
                 self._unsent(i, f"altitude target not finite: {vertical[i]}")
             if len(bad) == len(vertical):
