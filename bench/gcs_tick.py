@@ -51,10 +51,10 @@ import numpy as np
 import yaml
 
 from gcs.app import GcsApp, free_tcp_port
-from gcs.config import load_team
+from gcs.config import ensure_team_key, load_team
 from gcs.loop import Phase
 from gcs.transport import ZenohSettings, open_session
-from gcs.wire import MavlinkEncoder, keys
+from gcs.wire import MavlinkEncoder, SigningKey, keys
 from sim import LIFT_LAG_S, BackgroundStepping
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -81,20 +81,22 @@ def ring_team(n: int, folder: Path) -> Path:
             "operator": {"altitude_max": math.ceil(radius * 1.5) + 3.0},
             "safety": {"geofence_xy": 1000.0,
                        "geofence_altitude": math.ceil(radius * 1.5) + 3.0},
-            "gcs": {"fleet": f"bench{n}"}}
+            # the vehicles sign their frames with the team key, as the simulator's do: the
+            # GCS refuses unsigned ones, and would measure a team it never hears
+            "gcs": {"fleet": f"bench{n}", "team_key": str(folder / "team.key")}}
     path = folder / f"ring{n}.yaml"
     path.write_text(yaml.safe_dump(team))
     return path
 
 
 def play_vehicles(session, fleet: str, positions: np.ndarray, stop: threading.Event,  # type: ignore[no-untyped-def]
-                  *, background: bool = False) -> None:
+                  *, key: SigningKey | None = None, background: bool = False) -> None:
     """Publish each vehicle's telemetry at 20 Hz until ``stop`` (``background``: as a sim
     host with ``--background`` steps)."""
     n = len(positions)
     pubs = [session.declare_publisher(keys.mavlink(fleet, i + 1, keys.Direction.FROM_VEHICLE))
             for i in range(n)]
-    encs = [MavlinkEncoder(system_id=i + 1, component_id=1) for i in range(n)]
+    encs = [MavlinkEncoder(system_id=i + 1, component_id=1, signing_key=key) for i in range(n)]
     t0 = time.monotonic()
     due = [t0]
     priority = BackgroundStepping(lag_s=LIFT_LAG_S)
@@ -120,6 +122,7 @@ def play_vehicles(session, fleet: str, positions: np.ndarray, stop: threading.Ev
 def measure(n: int, seconds: float, folder: Path, *,
             background: bool = False) -> dict[str, float]:
     path = ring_team(n, folder)
+    ensure_team_key(folder / "team.key")  # made once, before both processes read it
     team = load_team(path)
     endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
     # the vehicles play in another process, as they would on the network
@@ -167,7 +170,8 @@ def play(path: str, endpoint: str, background: bool) -> None:
     session = open_session(ZenohSettings(mode="peer", listen=(endpoint,), connect=()))
     rng = np.random.default_rng(0)
     positions = team.formation.positions + rng.normal(0, 0.05, team.formation.positions.shape)
-    play_vehicles(session, team.config.gcs.fleet, positions, threading.Event(),
+    key, _ = ensure_team_key(Path(team.config.gcs.team_key or ""))
+    play_vehicles(session, team.config.gcs.fleet, positions, threading.Event(), key=key,
                   background=background)
 
 
