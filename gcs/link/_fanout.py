@@ -35,7 +35,7 @@ class Fanout:
     def __init__(self, links: Sequence[Link]) -> None:
         self._links = tuple(links)
         outbound = [link.outbound() for link in self._links]
-        self._sends = [o.send for o in outbound]
+        self._transports = [o.transport for o in outbound]
         self._closed = [o.closed for o in outbound]
         self._listened = [o.listened for o in outbound]  # live lists
         # Taken in one global order, so two fanouts over overlapping links cannot deadlock.
@@ -77,7 +77,7 @@ class Fanout:
                 packed[rows], crc_extra, rows)
             # locals, one zip and no call per frame but the send: this loop runs once per
             # vehicle and tick
-            sends, closed, listened = self._sends, self._closed, self._listened
+            transports, closed, listened = self._transports, self._closed, self._listened
             start = 0
             for i, size in zip(rows, lengths, strict=True):
                 frame = data[start:start + size]
@@ -86,7 +86,7 @@ class Fanout:
                     failed[i] = LinkError(self._links[i].sysid, "link is closed")
                     continue
                 try:
-                    sends[i](frame)
+                    transports[i].send(frame)
                 except Exception as exc:
                     failed[i] = exc
                     continue

@@ -73,8 +73,8 @@ class _PendingCommand:
 class Outbound(NamedTuple):
     """A link's sending side, for a sender that numbers and sends its frames in a batch."""
 
-    send: Callable[[bytes], None]
-    """The transport's send of one frame."""
+    transport: Transport
+    """The link's carrier: its ``send`` takes one frame (looked up at each send)."""
     closed: threading.Event
     """Set once the link is closed: its frames are then not sent."""
     listened: Sequence[object]
@@ -351,7 +351,7 @@ class Link:
     def outbound(self) -> Outbound:
         """What a batch sender needs to send this link's numbered frames itself, with no
         call per frame (:class:`~gcs.link.Fanout`: a fleet's setpoints each tick)."""
-        return Outbound(send=self._transport.send, closed=self._stop,
+        return Outbound(transport=self._transport, closed=self._stop,
                         listened=self._frame_listeners)
 
     def sent(self, frame: bytes) -> None:

@@ -155,12 +155,22 @@ def test_team_takes_off_flies_offboard_and_a_killed_vehicle_vanishes(gcs: Gcs) -
                    for link in manager.links.values())
 
     eventually(altitude_reached, "altitude reached and HOLD", timeout_s=10.0)
+    streaming = threading.Event()
+
+    def stream() -> None:
+        """0.6 m/s^2 north at 4 Hz to every vehicle from before the switch, as the GCS loop
+        streams through the handover: a vehicle in OFFBOARD before the slowest one has
+        confirmed must not wait half a second without setpoints (its timeout)."""
+        while not streaming.is_set():
+            for s in sysids:
+                manager.profiles[s].send_setpoint(accel_xy_ned=(0.6, 0.0), z_ned=-ALTITUDE)
+            streaming.wait(0.25)
+
+    streamer = threading.Thread(target=stream, daemon=True)
+    streamer.start()
     in_parallel(lambda s: manager.profiles[s].start_offboard(z_ned=-ALTITUDE), sysids)
     start = {s: manager.links[s].telemetry.position.p_ned for s in sysids}  # type: ignore[union-attr]
-    for _ in range(10):  # 2.5 s of setpoints at 4 Hz: 0.6 m/s^2 north
-        for s in sysids:
-            manager.profiles[s].send_setpoint(accel_xy_ned=(0.6, 0.0), z_ned=-ALTITUDE)
-        time.sleep(0.25)
+    time.sleep(2.5)  # 2.5 s of setpoints at 4 Hz, every vehicle in OFFBOARD
     moved_north, moved_east, pitches = [], [], []
     for s in sysids:
         t = manager.links[s].telemetry
@@ -198,6 +208,8 @@ def test_team_takes_off_flies_offboard_and_a_killed_vehicle_vanishes(gcs: Gcs) -
     assert sum(last.rope_tension) > 0.8 * 0.4 * 9.81  # together they carry the 0.4 kg
     assert last.payload_v_ned[0] > 0.3
 
+    streaming.set()
+    streamer.join(timeout=2.0)
     killed_at = time.monotonic()
     gcs.control(ControlAction.KILL, 4)
     eventually(lambda: gcs.seen(4, Presence.VANISHED, PresenceSource.LIVELINESS) is not None,
