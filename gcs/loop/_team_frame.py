@@ -50,6 +50,7 @@ from gcs.wire import (
     MavMessage,
     TelemetryRecord,
     geodetic_mean,
+    geodetic_median,
     geodetic_to_ned,
     local_origin,
 )
@@ -113,8 +114,9 @@ class _Vehicle:
     source: str = ""  # where the origin came from
     reported_at: float = -math.inf  # monotonic time of the latest GPS_GLOBAL_ORIGIN
     local: LocalPosition | None = None
-    pairs: deque[tuple[_Lla, _Lla]] = field(default_factory=lambda: deque(maxlen=_PAIRS))
-    """(fix, local NED position at the fix's instant) each."""
+    pairs: deque[_Lla] = field(default_factory=lambda: deque(maxlen=_PAIRS))
+    """The origin each recent (fix, local position) pair gives, kept: a new fix adds its
+    own, and the median of them is the vehicle's origin (as gcs.wire.local_origin)."""
     armed: bool = False
     heard: bool = False
     placed: tuple[float, float] | None = None  # the offset last announced
@@ -223,12 +225,13 @@ class TeamFrame:
             dt = msg.time_boot_ms / 1000.0 - local.time_boot_s
             if abs(dt) > PAIR_MAX_DT_S:
                 return
-            n, e, d = (p + u * dt for p, u in zip(local.p_ned, local.v_ned, strict=True))
-            v.pairs.append(((msg.lat * 1e-7, msg.lon * 1e-7, msg.alt * 1e-3), (n, e, d)))
-            fixes, positions = zip(*v.pairs, strict=True)
-        origin = _point(local_origin(fixes, positions))  # off the lock: a few conversions a pair
+            at = tuple(p + u * dt for p, u in zip(local.p_ned, local.v_ned, strict=True))
+        fix = (msg.lat * 1e-7, msg.lon * 1e-7, msg.alt * 1e-3)
+        this = local_origin([fix], [at])  # off the lock: this pair's alone, once
         with self._lock:  # this vehicle's messages come one at a time (its link's thread)
-            v.origin, v.source = origin, "GLOBAL_POSITION_INT"
+            v.pairs.append((float(this[0]), float(this[1]), float(this[2])))
+            v.origin = _point(geodetic_median(list(v.pairs)))
+            v.source = "GLOBAL_POSITION_INT"
             self._answered.notify_all()
         self._update(v)
 
