@@ -170,7 +170,7 @@ def play(path: str, endpoint: str, background: bool) -> None:
     session = open_session(ZenohSettings(mode="peer", listen=(endpoint,), connect=()))
     rng = np.random.default_rng(0)
     positions = team.formation.positions + rng.normal(0, 0.05, team.formation.positions.shape)
-    key, _ = ensure_team_key(Path(team.config.gcs.team_key or ""))
+    key, _ = ensure_team_key(Path(path).parent / "team.key")  # where ring_team points
     play_vehicles(session, team.config.gcs.fleet, positions, threading.Event(), key=key,
                   background=background)
 

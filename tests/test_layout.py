@@ -5,7 +5,9 @@ private (``_name.py``) and no other package reaches into them. Packages form
 layers without cycles, ``gcs`` never imports ``sim``, the simulated vehicles load
 nothing of the GCS's link layer, ``gcs analyze`` and ``gcs report`` load nothing of
 the page, and importing any package runs no work (the numba cache check waits for
-the first kernel built). The tests mirror the packages (``tests/README.md``).
+the first kernel built). The tests mirror the packages (``tests/README.md``). The
+loop's modules and classes and the analysis' functions stay small enough to read one
+at a time.
 """
 
 from __future__ import annotations
@@ -310,3 +312,77 @@ def test_the_gcs_and_the_simulator_start_without_the_report_and_fitting_librarie
         "from gcs.formation._graph import realize_positions\nimport numpy as np\n"
         "realize_positions(3, np.array([[0, 1], [1, 2], [2, 0]]), np.ones(3))\n"
         "import gcs.flightlog._report")
+
+
+# -- small units: the loop's modules and classes, the analysis' functions --------------------
+
+LOOP_MODULE_LINES = 400
+"""The longest a module of gcs/loop may be (gcs/loop/README.md: each stage a unit of its own)."""
+LOOP_CLASS_METHODS = 20
+"""The most functions a class of gcs/loop may define (properties and setters count)."""
+ANALYSIS_FUNCTION_LINES = 80
+"""The longest a function of gcs/analysis may be, from its ``def`` to its body's last line."""
+
+
+def _function_lengths(path: Path) -> list[tuple[str, int]]:
+    """Each function and method of ``path`` (nested ones too) with its length in lines."""
+    tree = ast.parse(path.read_text("utf-8"))
+    return [(f"{path.name}:{node.lineno} {node.name}", (node.end_lineno or node.lineno)
+             - node.lineno + 1) for node in ast.walk(tree)
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))]
+
+
+def _class_methods(path: Path) -> list[tuple[str, int]]:
+    """Each class of ``path`` with the number of functions defined in its body."""
+    tree = ast.parse(path.read_text("utf-8"))
+    return [(f"{path.name} {node.name}",
+             sum(isinstance(item, (ast.FunctionDef, ast.AsyncFunctionDef))
+                 for item in node.body))
+            for node in ast.walk(tree) if isinstance(node, ast.ClassDef)]
+
+
+def test_no_module_of_the_loop_is_over_400_lines() -> None:
+    files = sorted((ROOT / "gcs" / "loop").glob("*.py"))
+    assert len(files) > 10  # the package is where this test expects it
+    long = [f"{p.name}: {n} lines" for p in files
+            if (n := len(p.read_text("utf-8").splitlines())) > LOOP_MODULE_LINES]
+    assert not long, "\n".join(long)
+
+
+def test_no_class_of_the_loop_has_more_than_20_methods() -> None:
+    big = [f"{name}: {n} methods" for p in sorted((ROOT / "gcs" / "loop").glob("*.py"))
+           for name, n in _class_methods(p) if n > LOOP_CLASS_METHODS]
+    assert not big, "\n".join(big)
+
+
+def test_no_function_of_the_analysis_is_longer_than_80_lines() -> None:
+    files = sorted((ROOT / "gcs" / "analysis").glob("*.py"))
+    assert len(files) > 5  # the package is where this test expects it
+    long = [f"{name}: {n} lines" for path in files for name, n in _function_lengths(path)
+            if n > ANALYSIS_FUNCTION_LINES]
+    assert not long, "\n".join(long)
+
+
+def test_the_counts_are_of_lines_from_def_to_the_end_and_of_a_class_own_functions(
+        tmp_path: Path) -> None:
+    body = "\n".join(f"    x{i} = {i}" for i in range(ANALYSIS_FUNCTION_LINES - 2))
+    src = tmp_path / "m.py"
+    src.write_text(f'def f() -> None:\n    """Doc."""\n{body}\n    return None\n')
+    assert _function_lengths(src) == [("m.py:1 f", ANALYSIS_FUNCTION_LINES + 1)]
+    src.write_text("class C:\n    @property\n    def a(self) -> int:\n        return 1\n\n"
+                   "    @a.setter\n    def a(self, v: int) -> None:\n        pass\n\n"
+                   "    def b(self) -> None:\n        def inner() -> None:\n            pass\n")
+    assert _class_methods(src) == [("m.py C", 3)]  # a nested function is not a method
+
+
+def test_the_tick_runs_its_stages_in_the_order_the_loops_map_gives() -> None:
+    """gcs/loop/README.md's table and Runtime.stages name the stages in the same order."""
+    from gcs.loop import Stages
+
+    readme = (ROOT / "gcs" / "loop" / "README.md").read_text("utf-8")
+    order = list(Stages.__dataclass_fields__)
+    rows = [line.split("|")[2].strip() for line in readme.splitlines()
+            if line.startswith("| ") and line.split("|")[1].strip().isdigit()]
+    named = {"load_share": "load sharing", "phase": "phase, before the motion"}
+    positions = [rows.index(named.get(f, f)) for f in order]
+    assert positions == sorted(positions), (order, rows)

@@ -56,7 +56,7 @@ from gcs.loop._operator import OperatorCommand, OperatorSnapshot
 from gcs.loop._phases import Action, Phase, PhaseError
 from gcs.loop._prearm import Prearm, PrearmError
 from gcs.loop._record import FlightRecorder
-from gcs.loop._runtime import Runtime
+from gcs.loop._runtime import Runtime, Stages
 from gcs.loop._safety import SafetyReason
 from gcs.loop._setpoint_stage import HELD_SETPOINT_S
 from gcs.loop._snapshot import RuntimeSnapshot, TickStats
@@ -89,6 +89,7 @@ __all__ = [
     "Runtime",
     "RuntimeSnapshot",
     "SafetyReason",
+    "Stages",
     "StepGate",
     "TeamFrame",
     "TickStats",

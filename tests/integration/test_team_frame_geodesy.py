@@ -33,9 +33,10 @@ from gcs.wire import (
     mavlink,
     ned_to_geodetic,
 )
+from tests.support.paths import ROOT
+from tests.support.paths import SQUARE as SQUARE_PATH
 
-ROOT = Path(__file__).resolve().parents[2]
-SQUARE = ROOT / "configs" / "bebop_square.yaml"
+SQUARE = ROOT / SQUARE_PATH
 
 FAR_NORTH = Geodetic(69.65, 18.95, 20.0)
 """A field at 70 degrees north, where a sphere of the equator's radius is 0.2-0.3 % off."""
